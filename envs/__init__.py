@@ -1,0 +1,1 @@
+"""MJX tabletop scenes: objects, gripper, primitives, cameras and scenarios."""

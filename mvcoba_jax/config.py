@@ -1,0 +1,163 @@
+"""Configuration: frozen dataclasses, presets in `configs/<name>.py`, `key=value` overrides.
+
+A preset file defines `get_config() -> Config`. Overrides use dotted paths
+(`env.num_objects=5`, `scene.pool=cube:3,disk:1`) and are parsed by the field's type, so a typo
+or a bad value fails with a message that names the key.
+"""
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+import pathlib
+import typing
+
+
+@dataclasses.dataclass(frozen=True)
+class CameraConfig:
+  """A pinhole RGB-D camera looking from `pos` at `target`."""
+  pos: tuple[float, float, float]
+  target: tuple[float, float, float] = (0.0, 0.0, 0.0)
+  width: int = 64
+  height: int = 64
+  fovy_deg: float = 60.0
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneConfig:
+  """What goes into the compiled MuJoCo model."""
+  # Object slots: (shape name, count). Objects not in play are parked away from the table.
+  # The default holds every public VPG test case and leaves a choice for random drops.
+  pool: tuple[tuple[str, int], ...] = (
+      ('cube', 2), ('tall_box', 2), ('flat_box', 1), ('prism', 2), ('arch', 2),
+      ('cylinder', 1), ('disk', 1), ('octagon', 1))
+  workspace_half: float = 0.224  # workspace is x, y in [-h, h]
+  workspace_top: float = 0.4
+  timestep: float = 0.004
+  iterations: int = 4
+  ls_iterations: int = 6
+  friction: float = 1.0
+  finger_friction: float = 1.5
+  object_density: float = 500.0
+  max_geom_pairs: int = 24
+  max_contact_points: int = 96
+  cameras: tuple[CameraConfig, ...] = (
+      CameraConfig(pos=(0.45, 0.0, 0.55)), CameraConfig(pos=(-0.45, 0.0, 0.55)))
+  # Occluder slots: box half sizes. Their poses come from the scenario (parked when unused).
+  occluders: tuple[tuple[float, float, float], ...] = ()
+
+  @property
+  def num_slots(self) -> int:
+    return sum(n for _, n in self.pool)
+
+
+@dataclasses.dataclass(frozen=True)
+class EnvConfig:
+  """Episode and primitive parameters."""
+  num_objects: int = 10  # objects dropped by reset(key)
+  num_rotations: int = 16
+  settle_steps: int = 150  # physics steps after placing objects
+  drop_margin: float = 0.06  # keep dropped object centres this far inside the workspace
+  layer_height: float = 0.12  # vertical spacing of drop layers
+  # Grasp: descend to `grasp_depth` below the surface, close, lift `lift_height`.
+  grasp_depth: float = 0.03
+  lift_height: float = 0.30
+  approach_height: float = 0.08
+  descend_speed: float = 0.4
+  lift_speed: float = 0.6
+  close_time: float = 0.2
+  hold_time: float = 0.04
+  # Push: fingertips `push_height` above the table, move `push_length` along the direction.
+  push_height: float = 0.01
+  push_length: float = 0.10
+  push_speed: float = 0.25
+  min_tip_height: float = 0.005
+  # Health: any |qvel| above this (or a non-finite value) marks the environment unhealthy.
+  max_qvel: float = 50.0
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+  scene: SceneConfig = SceneConfig()
+  env: EnvConfig = EnvConfig()
+  num_envs: int = 8
+  seed: int = 0
+
+
+class ConfigError(ValueError):
+  """A preset or override that does not fit the configuration schema."""
+
+
+def load_preset(path: str | pathlib.Path) -> Config:
+  """Config returned by `get_config()` of the preset file at `path`."""
+  path = pathlib.Path(path)
+  if not path.is_file():
+    raise ConfigError(f'config preset {path} does not exist')
+  spec = importlib.util.spec_from_file_location(f'mvcoba_preset_{path.stem}', path)
+  module = importlib.util.module_from_spec(spec)
+  spec.loader.exec_module(module)
+  if not hasattr(module, 'get_config'):
+    raise ConfigError(f'config preset {path} defines no get_config()')
+  return module.get_config()
+
+
+def _parse(text: str, tp, key: str):
+  origin = typing.get_origin(tp)
+  try:
+    if tp is bool:
+      if text.lower() not in ('true', 'false', '1', '0'):
+        raise ValueError(text)
+      return text.lower() in ('true', '1')
+    if tp in (int, float, str):
+      return tp(text)
+    if origin is tuple:
+      args = typing.get_args(tp)
+      if args == (tuple[str, int], Ellipsis):  # pool: 'cube:3,disk:1'
+        return tuple((name, int(n)) for name, n in (item.split(':') for item in text.split(',')))
+      if len(args) == 2 and args[1] is Ellipsis:
+        return tuple(_parse(t, args[0], key) for t in text.split(',') if t)
+      parts = text.split(',')
+      if len(parts) != len(args):
+        raise ValueError(f'expected {len(args)} comma-separated values')
+      return tuple(_parse(t, a, key) for t, a in zip(parts, args))
+  except ValueError as e:
+    raise ConfigError(f'override {key}={text!r}: cannot parse as {tp}: {e}') from None
+  raise ConfigError(f'override {key}: fields of type {tp} cannot be set from the command line')
+
+
+def override(config, assignment: str):
+  """Config with one `dotted.key=value` assignment applied."""
+  if '=' not in assignment:
+    raise ConfigError(f'override {assignment!r} is not of the form key=value')
+  key, text = assignment.split('=', 1)
+  path = key.strip().split('.')
+
+  def apply(node, names):
+    fields = {f.name: f for f in dataclasses.fields(node)}
+    if names[0] not in fields:
+      raise ConfigError(f'unknown config key {key!r}: {type(node).__name__} has no field '
+                        f'{names[0]!r} (fields: {", ".join(fields)})')
+    value = getattr(node, names[0])
+    if len(names) > 1:
+      if not dataclasses.is_dataclass(value):
+        raise ConfigError(f'unknown config key {key!r}: {names[0]!r} has no sub-fields')
+      return dataclasses.replace(node, **{names[0]: apply(value, names[1:])})
+    hints = typing.get_type_hints(type(node))
+    if dataclasses.is_dataclass(value):
+      raise ConfigError(f'config key {key!r} is a group; set one of its fields')
+    return dataclasses.replace(node, **{names[0]: _parse(text.strip(), hints[names[0]], key)})
+
+  return apply(config, path)
+
+
+def resolve(preset: str | pathlib.Path | None, overrides: typing.Sequence[str] = ()) -> Config:
+  """The preset (or the default preset) with `overrides` applied in order."""
+  if preset is None:
+    preset = pathlib.Path(__file__).resolve().parent.parent / 'configs' / 'default.py'
+  config = load_preset(preset)
+  for assignment in overrides:
+    config = override(config, assignment)
+  return config
+
+
+def to_dict(config) -> dict:
+  return dataclasses.asdict(config)

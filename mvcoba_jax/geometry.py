@@ -1,0 +1,65 @@
+"""The one place for frames and rotations.
+
+Pixel (row, col) of a heightmap <-> world (x, y): row grows with y, col grows with x, and pixel
+(r, c) covers the cell whose lower corner is (x0 + c * res, y0 + r * res); its centre is the
+world point it stands for. Rotation index k means the angle k * 2 * pi / num_rotations.
+"""
+from __future__ import annotations
+
+import jax.numpy as jnp
+import mujoco
+import numpy as np
+
+
+def rotation_angle(k, num_rotations: int = 16):
+  """Angle (rad) of rotation index k: the primitive's yaw and push direction."""
+  return k * (2.0 * jnp.pi / num_rotations)
+
+
+def yaw_quat(yaw):
+  """Quaternion (w, x, y, z) of a rotation by `yaw` about the world z axis."""
+  half = 0.5 * yaw
+  zero = jnp.zeros_like(half)
+  return jnp.stack([jnp.cos(half), zero, zero, jnp.sin(half)], axis=-1)
+
+
+def quat_mul(a, b):
+  """Hamilton product of (w, x, y, z) quaternions (broadcasts)."""
+  aw, ax, ay, az = jnp.moveaxis(a, -1, 0)
+  bw, bx, by, bz = jnp.moveaxis(b, -1, 0)
+  return jnp.stack([
+      aw * bw - ax * bx - ay * by - az * bz,
+      aw * bx + ax * bw + ay * bz - az * by,
+      aw * by - ax * bz + ay * bw + az * bx,
+      aw * bz + ax * by - ay * bx + az * bw,
+  ], axis=-1)
+
+
+def euler_xyz_matrix(a: float, b: float, c: float) -> np.ndarray:
+  """R = Rx(a) Ry(b) Rz(c) as a 3x3 numpy matrix (the convention of VPG's test cases)."""
+  ca, sa, cb, sb, cc, sc = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(c), np.sin(c)
+  rx = np.array([[1, 0, 0], [0, ca, -sa], [0, sa, ca]])
+  ry = np.array([[cb, 0, sb], [0, 1, 0], [-sb, 0, cb]])
+  rz = np.array([[cc, -sc, 0], [sc, cc, 0], [0, 0, 1]])
+  return rx @ ry @ rz
+
+
+def matrix_to_quat(m: np.ndarray) -> np.ndarray:
+  """(w, x, y, z) unit quaternion of a rotation matrix (numpy, host side)."""
+  q = np.empty(4)
+  mujoco.mju_mat2Quat(q, np.asarray(m, dtype=np.float64).reshape(9))
+  return q
+
+
+def pixel_to_world(row, col, resolution: float, workspace_half: float):
+  """Centre (x, y) of heightmap pixel (row, col)."""
+  x = -workspace_half + (col + 0.5) * resolution
+  y = -workspace_half + (row + 0.5) * resolution
+  return x, y
+
+
+def world_to_pixel(x, y, resolution: float, workspace_half: float):
+  """Heightmap (row, col) of the cell that contains world point (x, y) (may be out of range)."""
+  col = jnp.floor((x + workspace_half) / resolution).astype(jnp.int32)
+  row = jnp.floor((y + workspace_half) / resolution).astype(jnp.int32)
+  return row, col

@@ -1,0 +1,37 @@
+"""Small builders shared by the tests."""
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from envs import shapes
+from envs.primitives import Action
+from envs.scene import park_position
+from envs.tabletop import Layout
+
+
+def layout(env, objects):
+  """Layout with `objects` = [(slot, x, y, yaw)] resting on the table; other slots parked."""
+  m = env.num_slots
+  in_play = np.zeros(m, bool)
+  pos = np.array([park_position(i) for i in range(m)], np.float32)
+  quat = np.tile(np.array([1, 0, 0, 0], np.float32), (m, 1))
+  for slot, x, y, yaw in objects:
+    half = 0.5 * shapes.SHAPES[env.scene.index.slot_shapes[slot]].extent[2]
+    in_play[slot] = True
+    pos[slot] = (x, y, half + 0.001)
+    quat[slot] = (np.cos(yaw / 2), 0, 0, np.sin(yaw / 2))
+  occ_pos, occ_quat = env.parked_occluders()
+  return Layout(in_play=jnp.asarray(in_play), pos=jnp.asarray(pos), quat=jnp.asarray(quat),
+                color=jnp.full((m, 3), 0.5), occluder_pos=occ_pos, occluder_quat=occ_quat)
+
+
+def stack(trees):
+  return jax.tree.map(lambda *x: jnp.stack(x), *trees)
+
+
+def actions(rows):
+  """Batched Action from [(primitive, rotation, x, y, z)]."""
+  p, r, x, y, z = (np.array(c) for c in zip(*rows))
+  return Action(primitive=jnp.asarray(p, jnp.int32), rotation=jnp.asarray(r, jnp.int32),
+                x=jnp.asarray(x, jnp.float32), y=jnp.asarray(y, jnp.float32),
+                z=jnp.asarray(z, jnp.float32))

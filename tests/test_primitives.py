@@ -1,0 +1,111 @@
+"""Grasp and push on the real MJX physics of the tiny scene (two cubes, two flat boxes).
+
+All cases run as one batch through one compiled `step`, as training does.
+"""
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from envs.primitives import GRASP, PUSH
+from envs.tabletop import Tabletop
+from mvcoba_jax.config import resolve
+from mvcoba_jax.geometry import rotation_angle
+from tests.helpers import actions, layout, stack
+
+CUBE, CUBE2, FLAT, FLAT2 = 0, 1, 2, 3
+YAWS = list(range(16))
+PUSH_ROTATIONS = list(range(0, 16, 2))
+CUBE_AT = (0.03, -0.02)
+
+
+@pytest.fixture(scope='module')
+def env():
+  return Tabletop(resolve('configs/tiny.py'))
+
+
+@pytest.fixture(scope='module')
+def compiled(env):
+  return jax.jit(jax.vmap(env.reset_from_case)), jax.jit(jax.vmap(env.step))
+
+
+@pytest.fixture(scope='module')
+def outcome(env, compiled):
+  """Start states, actions and results of every scripted case, run as one batch."""
+  reset, step = compiled
+  layouts, rows, names = [], [], []
+  for k in YAWS:  # an isolated cube grasped at every rotation
+    layouts.append(layout(env, [(CUBE, *CUBE_AT, 0.0)]))
+    rows.append((GRASP, k, *CUBE_AT, 0.05))
+    names.append(f'grasp{k}')
+  layouts.append(layout(env, [(CUBE, 0.1, 0.1, 0.0)]))  # grasp at an empty spot
+  rows.append((GRASP, 0, -0.1, -0.1, 0.0))
+  names.append('empty')
+  # Two flat boxes end to end, 2 mm apart: the fingers, closing across the gap, land on them.
+  layouts.append(layout(env, [(FLAT, -0.051, 0.0, 0.0), (FLAT2, 0.051, 0.0, 0.0)]))
+  rows.append((GRASP, 4, 0.0, 0.0, 0.025))
+  names.append('gap')
+  for k in PUSH_ROTATIONS:  # push a cube from 5 cm behind its centre
+    a = float(rotation_angle(k))
+    layouts.append(layout(env, [(CUBE, 0.0, 0.0, 0.0)]))
+    rows.append((PUSH, k, -0.05 * np.cos(a), -0.05 * np.sin(a), 0.05))
+    names.append(f'push{k}')
+  start = reset(stack(layouts))
+  end, info = step(start, actions(rows))
+  return dict(start=start, end=end, info=info, index={n: i for i, n in enumerate(names)})
+
+
+def test_isolated_cube_is_lifted_at_most_rotations(env, outcome):
+  info, end, idx = outcome['info'], outcome['end'], outcome['index']
+  rows = [idx[f'grasp{k}'] for k in YAWS]
+  success = np.asarray(info.grasp_success)[rows]
+  assert success.sum() >= 14, f'grasp success per rotation: {success.astype(int)}'
+  # A successful grasp removes the cube from play and counts it as picked.
+  assert not np.asarray(end.in_play)[rows, CUBE][success].any()
+  assert (np.asarray(end.picked)[rows][success] == 1).all()
+  assert np.asarray(info.healthy)[rows].all()
+
+
+def test_grasp_at_empty_spot_fails(outcome):
+  i = outcome['index']['empty']
+  assert not bool(outcome['info'].grasp_success[i])
+  assert int(outcome['end'].picked[i]) == 0
+  assert bool(outcome['end'].in_play[i, CUBE])
+
+
+def test_grasp_across_a_narrow_gap_never_takes_both(outcome):
+  i = outcome['index']['gap']
+  assert int(outcome['info'].picked[i]) <= 1
+  assert int(outcome['end'].in_play[i, FLAT]) + int(outcome['end'].in_play[i, FLAT2]) >= 1
+
+
+def test_push_moves_cube_about_10cm_along_direction(env, outcome):
+  start, end, idx = outcome['start'], outcome['end'], outcome['index']
+  before = jax.vmap(env.object_positions)(start)[:, CUBE]
+  after = jax.vmap(env.object_positions)(end)[:, CUBE]
+  for k in PUSH_ROTATIONS:
+    i = idx[f'push{k}']
+    a = float(rotation_angle(k))
+    move = np.asarray(after[i] - before[i])
+    along = move[0] * np.cos(a) + move[1] * np.sin(a)
+    across = -move[0] * np.sin(a) + move[1] * np.cos(a)
+    assert 0.07 <= along <= 0.13, f'rotation {k}: moved {along:.3f} m along the push'
+    assert abs(across) < 0.03, f'rotation {k}: drifted {across:.3f} m sideways'
+    assert bool(end.in_play[i, CUBE]) and not bool(outcome['info'].grasp_success[i])
+
+
+def test_unhealthy_env_is_detected_reset_and_counted(env, compiled, outcome):
+  _, step = compiled
+  start, idx = outcome['start'], outcome['index']
+  bad = start.replace(data=start.data.replace(
+      qvel=start.data.qvel.at[0, 7].set(jnp.nan)))
+  rows = [(GRASP, 0, 0.1, 0.1, 0.0)] * start.in_play.shape[0]
+  after, info = step(bad, actions(rows))
+  healthy = np.asarray(info.healthy)
+  assert not healthy[0] and healthy[1:].all()
+  healed = jax.jit(env.heal)(after)
+  assert np.asarray(healed.healthy).all()
+  assert np.asarray(healed.health_resets).tolist() == [1] + [0] * (len(healthy) - 1)
+  assert np.isfinite(np.asarray(healed.data.qpos[0])).all()
+  assert int(healed.in_play[0].sum()) == env.config.env.num_objects
+  np.testing.assert_array_equal(np.asarray(healed.data.qpos[1:]), np.asarray(after.data.qpos[1:]))
