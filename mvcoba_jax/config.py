@@ -161,3 +161,15 @@ def resolve(preset: str | pathlib.Path | None, overrides: typing.Sequence[str] =
 
 def to_dict(config) -> dict:
   return dataclasses.asdict(config)
+
+
+def add_arguments(parser) -> None:
+  """The `--config` and `--set` options every entry point takes."""
+  parser.add_argument('--config', default=None,
+                      help='preset file (default: configs/default.py)')
+  parser.add_argument('--set', dest='overrides', action='append', default=[],
+                      metavar='KEY=VALUE', help='override a config field, e.g. env.num_objects=5')
+
+
+def from_arguments(args) -> Config:
+  return resolve(args.config, args.overrides)
