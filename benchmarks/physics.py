@@ -128,8 +128,11 @@ def main():
   parser.add_argument('--batch', type=int, nargs='+', default=[1, 8, 32])
   parser.add_argument('--objects', type=int, nargs='+', default=[10, 30], choices=sorted(POOLS))
   parser.add_argument('--repeats', type=int, default=2)
+  parser.add_argument('--cache', action='store_true',
+                      help='use the persistent compilation cache (compile times then mean little)')
   args = parser.parse_args()
-  enable_compilation_cache()
+  if args.cache:
+    enable_compilation_cache()
   rows = []
   for n in args.objects:
     for b in args.batch:
@@ -150,6 +153,7 @@ def main():
           'primitive': 'grasp at the first object in play, full script',
           'native_note': 'native runs start from the same states and controls; parked objects '
                          'are not pinned there (they fall far outside the workspace)',
+          'persistent_compilation_cache': args.cache,
           'jax': jax.__version__, 'mujoco': mujoco.__version__, 'device': str(jax.devices()[0]),
           'cpu_count': os.cpu_count(), 'machine': platform.machine(),
       },

@@ -115,7 +115,7 @@ class Tabletop:
   def _finish(self, data: mjx.Data, in_play) -> mjx.Data:
     """Parks the gripper and removed objects; refreshes positions for rendering."""
     data = self._pin(self._place_gripper(data, self._gripper_park), in_play)
-    return mjx.kinematics(self.model, data)
+    return mjx.camlight(self.model, mjx.kinematics(self.model, data))
 
   # ----------------------------------------------------------------------------- reset
   def sample_layout(self, key) -> Layout:
@@ -168,8 +168,8 @@ class Tabletop:
     key, k_layout = jax.random.split(key)
     return self.reset_from_case(self.sample_layout(k_layout), key)
 
-  def reset_from_case(self, layout: Layout, key=None) -> EnvState:
-    """Places the objects of `layout` (a test case or a random drop) and lets them settle."""
+  def place(self, layout: Layout, key=None) -> EnvState:
+    """The objects of `layout` exactly where it puts them, without physics (for pictures)."""
     if key is None:
       key = jax.random.PRNGKey(0)
     data = mjx.make_data(self.model)
@@ -180,13 +180,18 @@ class Tabletop:
     data = data.replace(qpos=qpos,
                         mocap_pos=data.mocap_pos.at[mocap].set(layout.occluder_pos),
                         mocap_quat=data.mocap_quat.at[mocap].set(layout.occluder_quat))
-    data = self._place_gripper(data, self._gripper_park)
+    return EnvState(data=self._finish(data, layout.in_play), in_play=layout.in_play,
+                    color=layout.color, picked=jnp.int32(0), lost=jnp.int32(0),
+                    healthy=self._health(data), health_resets=jnp.int32(0), key=key)
+
+  def reset_from_case(self, layout: Layout, key=None) -> EnvState:
+    """Places the objects of `layout` (a test case or a random drop) and lets them settle."""
+    state = self.place(layout, key)
     park = self._gripper_park
-    data = self._simulate(data, layout.in_play, lambda t: park, self.config.env.settle_steps)
-    in_play = layout.in_play & self._in_workspace(data)
-    return EnvState(data=self._finish(data, in_play), in_play=in_play, color=layout.color,
-                    picked=jnp.int32(0), lost=jnp.int32(0), healthy=self._health(data),
-                    health_resets=jnp.int32(0), key=key)
+    data = self._simulate(state.data, state.in_play, lambda t: park, self.config.env.settle_steps)
+    in_play = state.in_play & self._in_workspace(data)
+    return state.replace(data=self._finish(data, in_play), in_play=in_play,
+                         healthy=self._health(data))
 
   # ----------------------------------------------------------------------------- step
   def step(self, state: EnvState, action: Action) -> tuple[EnvState, StepInfo]:

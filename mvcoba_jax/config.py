@@ -17,9 +17,9 @@ class CameraConfig:
   """A pinhole RGB-D camera looking from `pos` at `target`."""
   pos: tuple[float, float, float]
   target: tuple[float, float, float] = (0.0, 0.0, 0.0)
-  width: int = 64
-  height: int = 64
-  fovy_deg: float = 60.0
+  width: int = 160
+  height: int = 160
+  fovy_deg: float = 38.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -40,10 +40,13 @@ class SceneConfig:
   object_density: float = 500.0
   max_geom_pairs: int = 24
   max_contact_points: int = 96
+  # Opposite sides of the workspace; at 160 x 160 pixels each sees ~97% of a 112 x 112 grid.
   cameras: tuple[CameraConfig, ...] = (
-      CameraConfig(pos=(0.45, 0.0, 0.55)), CameraConfig(pos=(-0.45, 0.0, 0.55)))
-  # Occluder slots: box half sizes. Their poses come from the scenario (parked when unused).
-  occluders: tuple[tuple[float, float, float], ...] = ()
+      CameraConfig(pos=(0.35, 0.0, 0.65)), CameraConfig(pos=(-0.35, 0.0, 0.65)))
+  # Occluder slots (box half sizes, thin along x to face the cameras): one that can hide the
+  # whole workspace from a camera, two partial ones. Scenarios pose them; unused ones are parked.
+  occluders: tuple[tuple[float, float, float], ...] = (
+      (0.01, 0.12, 0.12), (0.01, 0.05, 0.05), (0.01, 0.05, 0.05))
 
   @property
   def num_slots(self) -> int:
@@ -76,9 +79,21 @@ class EnvConfig:
 
 
 @dataclasses.dataclass(frozen=True)
+class PerceptionConfig:
+  """Heightmaps and change observation (SPEC section 4)."""
+  heightmap_resolution: float = 0.004  # m per cell: 112 x 112 (the paper: 0.002 -> 224 x 224)
+  # Change is observed when more cells than `change_area` / resolution^2 changed height by
+  # between `change_min` and `change_max`: VPG's 300 cells at 2 mm, the same area at any grid.
+  change_area: float = 300 * 0.002 ** 2
+  change_min: float = 0.01
+  change_max: float = 0.3
+
+
+@dataclasses.dataclass(frozen=True)
 class Config:
   scene: SceneConfig = SceneConfig()
   env: EnvConfig = EnvConfig()
+  perception: PerceptionConfig = PerceptionConfig()
   num_envs: int = 8
   seed: int = 0
 

@@ -1,0 +1,112 @@
+"""Two-camera ray-cast rendering, heightmaps, occlusion and change observation (tiny scene)."""
+import jax
+import numpy as np
+import pytest
+
+from envs import shapes
+from envs.scenarios import case_to_layout, read_case
+from envs.tabletop import Tabletop
+from mvcoba_jax import perception
+from mvcoba_jax.config import resolve
+from mvcoba_jax.geometry import pixel_to_world
+from tests.helpers import layout, stack
+
+CUBE, CUBE2, FLAT, FLAT2 = 0, 1, 2, 3
+BOX_AT = (0.05, -0.03)  # flat box 10 x 5 x 2.5 cm, long side along x
+
+
+@pytest.fixture(scope='module')
+def env():
+  return Tabletop(resolve('configs/tiny.py'))
+
+
+@pytest.fixture(scope='module')
+def observe(env):
+  place = jax.jit(jax.vmap(env.place))
+  look = jax.jit(jax.vmap(lambda s: perception.observe(env, s)))
+  return lambda layouts: look(place(stack(layouts)))
+
+
+def cell_centres(env):
+  side = perception.grid_size(env.config)
+  rows, cols = np.meshgrid(np.arange(side), np.arange(side), indexing='ij')
+  return pixel_to_world(rows, cols, env.config.perception.heightmap_resolution,
+                        env.config.scene.workspace_half)
+
+
+def scenario(tmp_path, text):
+  path = tmp_path / 'case.scn'
+  path.write_text(text)
+  return path
+
+
+def test_box_of_known_size_has_the_right_heights_cells_and_colour(env, observe):
+  lay = layout(env, [(FLAT, *BOX_AT, 0.0)])
+  lay = lay.replace(color=lay.color.at[FLAT].set(shapes.COLORS[3]))
+  obs = jax.tree.map(lambda x: x[0], observe([lay]))
+  res = env.config.perception.heightmap_resolution
+  x, y = cell_centres(env)
+  dx, dy = np.abs(x - BOX_AT[0]), np.abs(y - BOX_AT[1])
+  inside = (dx < 0.05 - res) & (dy < 0.025 - res)  # a cell in from the edges
+  outside = (dx > 0.05 + res) | (dy > 0.025 + res)  # a cell out from the edges
+  for view in range(2):
+    depth = np.asarray(obs.depth[view])
+    seen = np.asarray(obs.seen[view])
+    assert seen[inside].all(), f'view {view} misses cells on the box top'
+    np.testing.assert_allclose(depth[inside], 0.025, atol=0.002)
+    assert np.abs(depth[outside]).max() < 0.002, f'view {view}: height off the box'
+    assert np.abs(np.asarray(obs.color[view])[inside] - shapes.COLORS[3]).max() < 1e-6
+    # The table reads 0 and has the table's colour where it is seen.
+    table = outside & seen
+    assert table.mean() > 0.8
+    assert np.abs(np.asarray(obs.color[view])[table] - 0.8).max() < 1e-6
+
+
+def visible_slots(env, obs, view):
+  """Object slots whose colour shows up in a view's colour heightmap over raised cells."""
+  raised = np.asarray(obs.depth[view]) > 0.01
+  colors = np.asarray(obs.color[view])[raised]
+  return {i for i, c in enumerate(shapes.COLORS[:env.num_slots])
+          if (np.abs(colors - c).max(axis=-1) < 1e-6).any()}
+
+
+def test_full_occluder_hides_everything_from_camera_1_only(env, observe, tmp_path):
+  case = read_case(scenario(tmp_path, 'cube blue 0.1 0.12 0\ncube green -0.1 -0.12 0\n'
+                                      'occluder 0 0.3 0 0.49 0\n'))
+  obs = jax.tree.map(lambda x: x[0], observe([case_to_layout(case, env)]))
+  assert not np.asarray(obs.seen[0]).any(), 'camera 1 sees through the occluder'
+  assert (np.asarray(obs.depth[1]) > 0.04).sum() > 20
+  assert visible_slots(env, obs, 1) == {0, 1}
+
+
+def test_partial_occluders_leave_each_view_an_object_the_other_misses(env, observe, tmp_path):
+  case = read_case(scenario(tmp_path, 'cube blue 0.1 0.12 0\ncube green -0.1 -0.12 0\n'
+                                      'occluder 1 0.275 0.036 0.47 0\n'
+                                      'occluder 2 -0.275 -0.036 0.47 0\n'))
+  obs = jax.tree.map(lambda x: x[0], observe([case_to_layout(case, env)]))
+  view1, view2 = visible_slots(env, obs, 0), visible_slots(env, obs, 1)
+  assert view1 - view2 and view2 - view1, (view1, view2)
+
+
+def test_change_observation(env, observe):
+  cfg = env.config.perception
+  lays = [layout(env, [(CUBE, 0.0, 0.0, 0.0), (FLAT, -0.1, 0.1, 0.0)]),
+          layout(env, [(CUBE, 0.05, 0.0, 0.0), (FLAT, -0.1, 0.1, 0.0)]),  # cube moved 5 cm
+          layout(env, [(FLAT, -0.1, 0.1, 0.0)])]  # cube grasped away
+  obs = observe(lays)
+  frame = lambda i: jax.tree.map(lambda x: x[i], obs)
+  no = np.bool_(False)
+  assert bool(perception.change_observed(frame(0), frame(1), no, cfg))
+  assert not bool(perception.change_observed(frame(0), frame(0), no, cfg))
+  assert bool(perception.change_observed(frame(0), frame(2), no, cfg))
+  assert bool(perception.change_observed(frame(0), frame(0), np.bool_(True), cfg))
+  # Missing cells never count: the same scene with one view blanked out changes nothing.
+  blind = frame(1).replace(seen=frame(1).seen.at[0].set(False), depth=frame(1).depth.at[0].set(0))
+  counts = np.asarray(perception.change_counts(frame(0), blind, cfg))
+  assert counts[0] == 0 and counts[1] > perception.change_threshold(cfg)
+
+
+def test_change_threshold_means_the_same_area_at_any_resolution(env):
+  cfg = env.config.perception
+  assert perception.change_threshold(cfg.__class__(heightmap_resolution=0.002)) == pytest.approx(300)
+  assert perception.change_threshold(cfg.__class__(heightmap_resolution=0.004)) == pytest.approx(75)
