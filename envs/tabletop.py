@@ -219,21 +219,25 @@ class Tabletop:
     return state, info
 
   # ----------------------------------------------------------------------------- health
-  def heal(self, states: EnvState) -> EnvState:
-    """Batched: redraws every unhealthy environment (a fresh random drop) and counts it.
+  def reset_where(self, states: EnvState, mask) -> EnvState:
+    """Batched: redraws the environments in `mask` (fresh random drops); the others carry on.
 
-    Runs the reset only when some environment needs it; the others carry on unchanged.
+    Unhealthy ones are counted in `health_resets`. The reset runs only when some environment
+    needs it.
     """
     def redraw(states):
-      keys = jax.vmap(lambda k: jax.random.split(k))(states.key)
+      keys = jax.vmap(jax.random.split)(states.key)
       fresh = jax.vmap(self.reset)(keys[:, 1])
-      bad = ~states.healthy
       merged = jax.tree.map(
-          lambda new, old: jnp.where(bad.reshape(bad.shape + (1,) * (new.ndim - 1)), new, old),
+          lambda new, old: jnp.where(mask.reshape(mask.shape + (1,) * (new.ndim - 1)), new, old),
           fresh, states)
-      return merged.replace(health_resets=states.health_resets + bad.astype(jnp.int32),
-                            key=keys[:, 0])
-    return jax.lax.cond(jnp.all(states.healthy), lambda s: s, redraw, states)
+      counted = states.health_resets + (mask & ~states.healthy).astype(jnp.int32)
+      return merged.replace(health_resets=counted, key=keys[:, 0])
+    return jax.lax.cond(jnp.any(mask), redraw, lambda s: s, states)
+
+  def heal(self, states: EnvState) -> EnvState:
+    """Batched: redraws every unhealthy environment and counts it."""
+    return self.reset_where(states, ~states.healthy)
 
   # ----------------------------------------------------------------------------- queries
   def object_positions(self, state: EnvState):

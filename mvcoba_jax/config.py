@@ -89,11 +89,48 @@ class PerceptionConfig:
   change_max: float = 0.3
 
 
+METHODS = ('mvcoba', 'mvcoba_2fcn', 'vpg', 'grasp_only')
+
+
+@dataclasses.dataclass(frozen=True)
+class NetworkConfig:
+  """The Q-network (SPEC section 5). `method` picks the architecture and the action rule."""
+  method: str = 'mvcoba'  # one of METHODS
+  trunk: str = 'small'  # 'small' (CPU-sized, from scratch) or 'densenet121' (GPU-sized)
+  stem_patch: int = 4  # the stem turns patch x patch cells into one feature vector
+  features: tuple[int, ...] = (32, 64, 64)  # channels of the trunk stages (small trunk)
+  groups: int = 8  # GroupNorm groups
+
+
+@dataclasses.dataclass(frozen=True)
+class TrainConfig:
+  """Q-learning (SPEC section 6)."""
+  total_actions: int = 3000  # counted over all environments
+  steps_per_iteration: int = 4  # lockstep actions per compiled call (lax.scan length)
+  learning_rate: float = 1e-4
+  momentum: float = 0.9
+  weight_decay: float = 2e-5
+  gamma: float = 0.5
+  huber_delta: float = 1.0
+  epsilon_start: float = 0.5
+  epsilon_end: float = 0.1
+  epsilon_decay_actions: int = 2000  # linear decay over this many actions
+  replay_capacity: int = 1024  # transitions kept on the device
+  batch_size: int = 8  # transitions per SGD update, one update per lockstep action
+  priority_exponent: float = 0.6  # sampling weight |TD error|^alpha (0: uniform)
+  target_update_period: int = 50  # SGD updates between target-network copies
+  max_consecutive_failures: int = 10  # an episode with more is stuck and gets new objects
+  checkpoint_every: int = 25  # host iterations between checkpoints
+  curve_window: int = 200  # attempts in the sliding window of the training curves
+
+
 @dataclasses.dataclass(frozen=True)
 class Config:
   scene: SceneConfig = SceneConfig()
   env: EnvConfig = EnvConfig()
   perception: PerceptionConfig = PerceptionConfig()
+  network: NetworkConfig = NetworkConfig()
+  train: TrainConfig = TrainConfig()
   num_envs: int = 8
   seed: int = 0
 

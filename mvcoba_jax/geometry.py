@@ -63,3 +63,33 @@ def world_to_pixel(x, y, resolution: float, workspace_half: float):
   col = jnp.floor((x + workspace_half) / resolution).astype(jnp.int32)
   row = jnp.floor((y + workspace_half) / resolution).astype(jnp.int32)
   return row, col
+
+
+def rotate_images(images, angle):
+  """`images` (N, H, W, C) rotated by `angle` (scalar or (N,) rad) about the image centre.
+
+  Counter-clockwise in the pixel frame (x = col, y = row), the frame of `pixel_to_world`, so a
+  world direction at yaw t points at yaw t + angle afterwards: content at (x, y) relative to the
+  centre moves to (x cos a - y sin a, x sin a + y cos a). Each output pixel samples its source
+  bilinearly; sources outside the image read 0 (a missing cell). Linear in `images`, smooth in
+  `angle`: the networks rotate inputs by -angle and outputs back by +angle with it.
+  """
+  n, h, w, _ = images.shape
+  angle = jnp.broadcast_to(jnp.asarray(angle, images.dtype), (n,))
+  cy, cx = 0.5 * (h - 1), 0.5 * (w - 1)
+  y, x = jnp.meshgrid(jnp.arange(h, dtype=images.dtype) - cy,
+                      jnp.arange(w, dtype=images.dtype) - cx, indexing='ij')
+  cos, sin = jnp.cos(angle)[:, None, None], jnp.sin(angle)[:, None, None]
+  src_row = cy - sin * x + cos * y  # the inverse rotation of each output pixel
+  src_col = cx + cos * x + sin * y
+  row0, col0 = jnp.floor(src_row), jnp.floor(src_col)
+  frac_row, frac_col = src_row - row0, src_col - col0
+  row0, col0 = row0.astype(jnp.int32), col0.astype(jnp.int32)
+  batch = jnp.arange(n)[:, None, None]
+  out = jnp.zeros_like(images)
+  for dr, dc in ((0, 0), (0, 1), (1, 0), (1, 1)):
+    r, c = row0 + dr, col0 + dc
+    weight = (frac_row if dr else 1 - frac_row) * (frac_col if dc else 1 - frac_col)
+    weight = jnp.where((r >= 0) & (r < h) & (c >= 0) & (c < w), weight, 0.0)
+    out = out + weight[..., None] * images[batch, jnp.clip(r, 0, h - 1), jnp.clip(c, 0, w - 1)]
+  return out

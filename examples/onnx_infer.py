@@ -1,0 +1,88 @@
+"""Chooses one push or grasp with an exported MV-COBA Q-network, without JAX.
+
+  python examples/onnx_infer.py --model DIR --state state.npz [--changed 0|1]
+
+DIR is the output of `python -m mvcoba_jax.export`. state.npz holds `color` (V, R, R, 3) RGB in
+0..1 and `depth` (V, R, R) heights in metres: the heightmaps of every camera view. `--changed`
+says whether the previous action changed the scene (1 before the first action), which the
+change-observation rule of MV-COBA needs. Prints the action as one line of JSON.
+
+Only the action rule and pixel -> world run here; the ONNX graph does the rest, rotations
+included (model.json, 'onnx').
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import sys
+
+import numpy as np
+import onnxruntime as ort
+
+
+def choose(q: np.ndarray, changed: bool, model: dict) -> dict:
+  """The greedy action of `model['action_rule']` from Q maps (2, K, R, R)."""
+  prims = model['primitives']
+  flat = q.reshape(q.shape[0], -1)
+  rule = model['action_rule']['name']
+  if rule == 'change':
+    primitive = prims['grasp'] if changed else prims['push']
+  elif rule == 'max_q':
+    primitive = int(np.argmax(flat.max(axis=1)))  # first maximum: push on a tie
+  else:
+    primitive = prims['grasp']
+  index = int(np.argmax(flat[primitive]))
+  rotation, row, col = (int(i) for i in np.unravel_index(index, q.shape[1:]))
+  return {'primitive': primitive, 'rotation': rotation, 'row': row, 'col': col,
+          'q': float(flat[primitive, index])}
+
+
+def to_world(action: dict, depth: np.ndarray, model: dict) -> dict:
+  """Adds angle and the world point (x, y, z) of the action, per model.json 'pixel_to_world'."""
+  hm = model['heightmap']
+  res, half = hm['resolution_m'], hm['workspace_half_m']
+  row, col = action['row'], action['col']
+  names = {v: k for k, v in model['primitives'].items()}
+  return {'primitive_name': names[action['primitive']], **action,
+          'angle_rad': model['rotations']['angles_rad'][action['rotation']],
+          'x': -half + (col + 0.5) * res, 'y': -half + (row + 0.5) * res,
+          'z': float(depth[hm['views_used'], row, col].max())}
+
+
+def load_state(path: pathlib.Path, model: dict) -> tuple[np.ndarray, np.ndarray]:
+  """(color, depth) of state.npz, checked against the model's input shapes."""
+  with np.load(path) as data:
+    color, depth = (np.asarray(data[k], np.float32) for k in ('color', 'depth'))
+  for name, array in (('color', color), ('depth', depth)):
+    want = next(i['shape'][1:] for i in model['onnx']['inputs'] if i['name'] == name)
+    if list(array.shape) != want:
+      raise ValueError(f'{path}: {name} has shape {list(array.shape)}, the model wants {want}')
+  return color, depth
+
+
+def main(argv=None) -> int:
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument('--model', required=True, type=pathlib.Path, help='export folder')
+  parser.add_argument('--state', required=True, type=pathlib.Path, help='npz: color, depth')
+  parser.add_argument('--changed', type=int, choices=(0, 1), default=1,
+                      help='whether the previous action changed the scene (default 1)')
+  args = parser.parse_args(argv)
+  try:
+    model = json.loads((args.model / 'model.json').read_text())
+    color, depth = load_state(args.state, model)
+  except (OSError, KeyError, ValueError) as e:
+    print(f'error: {e}', file=sys.stderr)
+    return 2
+  options = ort.SessionOptions()
+  options.log_severity_level = 3  # the converter's loose shape annotations only warn
+  session = ort.InferenceSession(str(args.model / model['onnx']['file']), options,
+                                 providers=['CPUExecutionProvider'])
+  (q,) = session.run(['q'], {'color': color[None], 'depth': depth[None]})
+  action = to_world(choose(q[0], bool(args.changed), model), depth, model)
+  print(json.dumps(action))
+  return 0
+
+
+if __name__ == '__main__':
+  sys.exit(main())

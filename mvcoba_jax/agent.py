@@ -1,0 +1,96 @@
+"""Acting and learning rules shared by every method: action choice, rewards, Q-learning targets.
+
+Q maps are (B, 2, K, R, R): primitive (PUSH 0, GRASP 1), rotation, heightmap row and column.
+"""
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+from flax import struct
+
+from envs.primitives import GRASP, PUSH, Action
+from mvcoba_jax.config import Config, TrainConfig
+from mvcoba_jax.geometry import pixel_to_world
+
+CHANGE_RULE_METHODS = ('mvcoba', 'mvcoba_2fcn')  # grasp by default, push after no change
+
+
+@struct.dataclass
+class PixelAction:
+  """An action in heightmap terms: what the replay stores and the loss indexes."""
+  primitive: jnp.ndarray  # (B,) int32
+  rotation: jnp.ndarray  # (B,) int32
+  row: jnp.ndarray  # (B,) int32
+  col: jnp.ndarray  # (B,) int32
+
+
+def rule_primitive(method: str, changed, best_per_primitive):
+  """The primitive each method's rule picks: change observation, max-Q, or always grasp.
+
+  `changed` is whether the previous action changed the scene (True before the first action);
+  `best_per_primitive` is (B, 2) max Q of each primitive.
+  """
+  if method in CHANGE_RULE_METHODS:
+    return jnp.where(changed, GRASP, PUSH).astype(jnp.int32)
+  if method == 'vpg':
+    return jnp.argmax(best_per_primitive, axis=-1).astype(jnp.int32)
+  return jnp.full(changed.shape, GRASP, jnp.int32)
+
+
+def choose_actions(q, changed, epsilon, key, method: str) -> PixelAction:
+  """Epsilon-greedy actions from Q maps (B, 2, K, R, R).
+
+  Exploration draws a random rotation and pixel of the rule's primitive (and, for max-Q
+  methods, a random primitive too).
+  """
+  b, _, k, r, _ = q.shape
+  flat = q.reshape(b, 2, k * r * r)
+  primitive = rule_primitive(method, changed, flat.max(axis=-1))
+  k_explore, k_prim, k_cell = jax.random.split(key, 3)
+  explore = jax.random.uniform(k_explore, (b,)) < epsilon
+  if method == 'vpg':
+    primitive = jnp.where(explore, jax.random.randint(k_prim, (b,), 0, 2), primitive)
+  chosen = jnp.take_along_axis(flat, primitive[:, None, None], axis=1)[:, 0]
+  index = jnp.where(explore, jax.random.randint(k_cell, (b,), 0, k * r * r),
+                    jnp.argmax(chosen, axis=-1))
+  rotation, row, col = jnp.unravel_index(index, (k, r, r))
+  return PixelAction(primitive=primitive.astype(jnp.int32), rotation=rotation.astype(jnp.int32),
+                     row=row.astype(jnp.int32), col=col.astype(jnp.int32))
+
+
+def to_world(action: PixelAction, depth, views: tuple[int, ...], config: Config) -> Action:
+  """World-frame primitive at the pixel; z is the highest surface the method's views see there."""
+  x, y = pixel_to_world(action.row, action.col, config.perception.heightmap_resolution,
+                        config.scene.workspace_half)
+  b = jnp.arange(depth.shape[0])
+  z = jnp.max(depth[:, jnp.asarray(views)][b, :, action.row, action.col], axis=-1)
+  return Action(primitive=action.primitive, rotation=action.rotation, x=x, y=y, z=z)
+
+
+def reward(primitive, grasp_success, changed):
+  """Grasp 1 on success, 0.5 on a failure that changed the scene; push 0.5 on change."""
+  grasp_reward = jnp.where(grasp_success, 1.0, jnp.where(changed, 0.5, 0.0))
+  return jnp.where(primitive == GRASP, grasp_reward, jnp.where(changed, 0.5, 0.0))
+
+
+def failed(primitive, grasp_success, changed):
+  """An action that achieved nothing: a grasp that held nothing, a push that changed nothing."""
+  return jnp.where(primitive == GRASP, ~grasp_success, ~changed)
+
+
+def target_value(q_next, changed, done, rew, method: str, train: TrainConfig):
+  """y = r + gamma * max Q_target(s', a') over the primitive the rule picks at s' (0 at episode end)."""
+  b = q_next.shape[0]
+  best = q_next.reshape(b, 2, -1).max(axis=-1)
+  primitive = rule_primitive(method, changed, best)
+  if method == 'vpg':
+    future = best.max(axis=-1)
+  else:
+    future = jnp.take_along_axis(best, primitive[:, None], axis=1)[:, 0]
+  return rew + train.gamma * jnp.where(done, 0.0, future)
+
+
+def epsilon_at(actions, train: TrainConfig):
+  """Linear decay from epsilon_start to epsilon_end over epsilon_decay_actions actions."""
+  frac = jnp.clip(actions / max(train.epsilon_decay_actions, 1), 0.0, 1.0)
+  return train.epsilon_start + frac * (train.epsilon_end - train.epsilon_start)

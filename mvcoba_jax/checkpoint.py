@@ -1,0 +1,101 @@
+"""Checkpoints of the whole training state with Orbax: atomic, resumable, shape-checked.
+
+Orbax writes each step into a temporary folder and renames it when complete, so a run killed
+mid-save leaves the previous checkpoint intact. Beside the state we keep a JSON of the resolved
+config and the host counters; a checkpoint is only restored into a run whose network, scene and
+batch shapes match, otherwise the differing keys are named.
+"""
+from __future__ import annotations
+
+import json
+import pathlib
+
+import jax
+import orbax.checkpoint as ocp
+
+from mvcoba_jax import config as config_lib
+
+# Config sections that fix the shapes of the saved state; they must match to resume.
+SHAPE_KEYS = ('scene', 'perception', 'network', 'num_envs', 'train.replay_capacity',
+              'env.num_objects', 'env.num_rotations')
+
+
+class CheckpointError(RuntimeError):
+  """A checkpoint that is missing or cannot be restored into this run."""
+
+
+def _flatten(tree, prefix=''):
+  if isinstance(tree, dict):
+    out = {}
+    for k, v in tree.items():
+      out.update(_flatten(v, f'{prefix}{k}.'))
+    return out
+  return {prefix[:-1]: tree}
+
+
+def _lookup(flat: dict, key: str) -> dict:
+  return {k: v for k, v in flat.items() if k == key or k.startswith(key + '.')}
+
+
+def incompatibilities(saved: dict, current: dict) -> list[str]:
+  """Human-readable differences in the shape-defining config keys (both as JSON would hold them)."""
+  a, b = _flatten(saved), _flatten(json.loads(json.dumps(current)))
+  problems = []
+  for key in SHAPE_KEYS:
+    sa, sb = _lookup(a, key), _lookup(b, key)
+    problems += [f'{k}: checkpoint {sa.get(k)!r}, this run {sb.get(k)!r}'
+                 for k in sorted(set(sa) | set(sb)) if sa.get(k) != sb.get(k)]
+  return problems
+
+
+def _name(i: int) -> str:
+  return f'leaf{i:05d}'
+
+
+def _leaves(state) -> dict:
+  """The state's non-empty arrays by position (Orbax cannot save zero-size arrays)."""
+  return {_name(i): leaf for i, leaf in enumerate(jax.tree.leaves(state)) if leaf.size}
+
+
+class Checkpoints:
+  """The checkpoints of one work directory."""
+
+  def __init__(self, directory: str | pathlib.Path, max_to_keep: int = 2):
+    self.directory = pathlib.Path(directory).resolve() / 'checkpoints'
+    self.manager = ocp.CheckpointManager(
+        self.directory, item_names=('state', 'meta'),
+        options=ocp.CheckpointManagerOptions(max_to_keep=max_to_keep, create=True,
+                                             enable_async_checkpointing=False))
+
+  def latest(self) -> int | None:
+    return self.manager.latest_step()
+
+  def save(self, step: int, state, meta: dict) -> None:
+    self.manager.save(step, args=ocp.args.Composite(state=ocp.args.StandardSave(_leaves(state)),
+                                                    meta=ocp.args.JsonSave(meta)))
+    self.manager.wait_until_finished()
+
+  def meta(self, step: int | None = None) -> dict:
+    step = self._step(step)
+    return self.manager.restore(step, args=ocp.args.Composite(meta=ocp.args.JsonRestore()))['meta']
+
+  def restore(self, like, config, step: int | None = None):
+    """(state, meta) of `step` (default: the latest), checked against `config` first."""
+    step = self._step(step)
+    meta = self.meta(step)
+    problems = incompatibilities(meta['config'], config_lib.to_dict(config))
+    if problems:
+      raise CheckpointError(f'checkpoint {self.directory / str(step)} was written by a run of '
+                            'another shape; it cannot be resumed here:\n  ' + '\n  '.join(problems))
+    abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, _leaves(like))
+    restored = self.manager.restore(
+        step, args=ocp.args.Composite(state=ocp.args.StandardRestore(abstract)))['state']
+    leaves, treedef = jax.tree.flatten(like)
+    return jax.tree.unflatten(treedef, [restored.get(_name(i), leaf)
+                                        for i, leaf in enumerate(leaves)]), meta
+
+  def _step(self, step):
+    step = self.latest() if step is None else step
+    if step is None:
+      raise CheckpointError(f'no checkpoint in {self.directory}')
+    return step

@@ -1,0 +1,194 @@
+"""One jit-compiled training step for B tabletops in lockstep, and a scan of K of them.
+
+act -> primitive physics -> render -> heightmaps -> change observation -> reward -> replay write
+-> sample -> SGD update -> auto-reset of finished environments. The whole training state is one
+pytree (`TrainState`), so a checkpoint is that pytree and resuming is exact.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import optax
+from flax import nnx, struct
+
+from envs import reserve as reserve_lib
+from envs.tabletop import EnvState, Tabletop
+from mvcoba_jax import agent, networks, perception, replay as replay_lib
+from mvcoba_jax.config import Config
+
+
+@struct.dataclass
+class TrainState:
+  env: EnvState  # (B,) environments
+  reserve: reserve_lib.Reserve  # settled tabletops for episodes that end
+  obs: perception.Observation  # (B,) current heightmaps
+  changed: jnp.ndarray  # (B,) bool: the last action changed the scene (True at episode start)
+  failures: jnp.ndarray  # (B,) int32: consecutive failed actions this episode
+  params: Any
+  target_params: Any
+  opt_state: Any
+  replay: replay_lib.Replay
+  key: jnp.ndarray
+  actions: jnp.ndarray  # int32: actions executed so far, over all environments
+  updates: jnp.ndarray  # int32: SGD updates applied
+  skipped_updates: jnp.ndarray  # int32: updates refused for a non-finite loss or parameter
+  episodes: jnp.ndarray  # int32: episodes finished (cleared, stuck or bad physics)
+
+
+@struct.dataclass
+class StepLog:
+  """What happened in one lockstep action, per environment (B,) unless noted."""
+  primitive: jnp.ndarray
+  grasp_success: jnp.ndarray
+  changed: jnp.ndarray
+  reward: jnp.ndarray
+  done: jnp.ndarray
+  healthy: jnp.ndarray
+  picked: jnp.ndarray
+  lost: jnp.ndarray
+  loss: jnp.ndarray  # scalar: the update's loss (0 when no update ran)
+  epsilon: jnp.ndarray  # scalar
+
+
+def _select(mask, new, old):
+  """Per-environment choice between two batched pytrees."""
+  return jax.tree.map(
+      lambda a, b: jnp.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b), new, old)
+
+
+def _all_finite(tree):
+  return jnp.all(jnp.stack([jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves(tree)]))
+
+
+class Trainer:
+  """Static parts of training (environment, network graph, optimiser); methods are pure."""
+
+  def __init__(self, config: Config):
+    self.config = config
+    self.env = Tabletop(config)
+    self.method = config.network.method
+    self.views = networks.views_used(self.method)
+    model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
+    self.graphdef, _ = nnx.split(model)
+    t = config.train
+    self.optimizer = optax.chain(optax.add_decayed_weights(t.weight_decay),
+                                 optax.sgd(t.learning_rate, momentum=t.momentum))
+
+  # ---------------------------------------------------------------- network
+  def q_maps(self, params, obs: perception.Observation, rotations=None):
+    return nnx.merge(self.graphdef, params)(obs.color, obs.depth, rotations)
+
+  def init_params(self, key):
+    model = networks.build_network(self.config.network, self.config.env.num_rotations,
+                                   nnx.Rngs(params=key))
+    return nnx.split(model)[1]
+
+  def observe(self, env_states):
+    return jax.vmap(lambda s: perception.observe(self.env, s))(env_states)
+
+  # ---------------------------------------------------------------- state
+  def init(self, key) -> TrainState:
+    """Fresh parameters, an empty replay, B freshly dropped tabletops and a full reserve."""
+    b = self.config.num_envs
+    k_params, k_env, key = jax.random.split(key, 3)
+    params = self.init_params(k_params)
+    dropped = jax.vmap(self.env.reset)(jax.random.split(k_env, 3 * b))  # one compiled reset
+    env_states = jax.tree.map(lambda x: x[:b], dropped)
+    obs = self.observe(env_states)
+    example = jax.tree.map(lambda x: x[0], obs)
+    return TrainState(
+        env=env_states, obs=obs,
+        reserve=reserve_lib.Reserve(states=jax.tree.map(lambda x: x[b:], dropped),
+                                    available=jnp.int32(2 * b)),
+        changed=jnp.ones(b, bool), failures=jnp.zeros(b, jnp.int32),
+        params=params, target_params=params, opt_state=self.optimizer.init(params),
+        replay=replay_lib.Replay.create(self.config.train.replay_capacity, example),
+        key=key, actions=jnp.int32(0), updates=jnp.int32(0), skipped_updates=jnp.int32(0),
+        episodes=jnp.int32(0))
+
+  # ---------------------------------------------------------------- learning
+  def loss(self, params, target_params, batch, valid):
+    """Huber loss on the executed pixel of each sampled transition; also returns TD errors."""
+    t = self.config.train
+    q_next = self.q_maps(target_params, batch.next_obs)
+    y = agent.target_value(q_next, batch.changed, batch.done, batch.reward, self.method, t)
+    q = self.q_maps(params, batch.obs, batch.rotation[:, None])
+    pred = networks.executed_q(q, batch.primitive, batch.row, batch.col)
+    per = networks.huber_loss(pred, jax.lax.stop_gradient(y), t.huber_delta)
+    weight = valid.astype(jnp.float32)
+    return jnp.sum(per * weight) / jnp.maximum(jnp.sum(weight), 1.0), pred - y
+
+  def update(self, state: TrainState, key) -> tuple[TrainState, jnp.ndarray]:
+    """One SGD step on a prioritised batch; a non-finite loss or parameter leaves all as it was."""
+    t = self.config.train
+    index, batch, valid = replay_lib.sample(state.replay, key, t.batch_size, t.priority_exponent)
+    (loss, td), grads = jax.value_and_grad(self.loss, has_aux=True)(
+        state.params, state.target_params, batch, valid)
+    updates, opt_state = self.optimizer.update(grads, state.opt_state, state.params)
+    params = optax.apply_updates(state.params, updates)
+    ok = jnp.isfinite(loss) & _all_finite(params)
+    keep = lambda new, old: jax.tree.map(lambda a, b: jnp.where(ok, a, b), new, old)
+    params, opt_state = keep(params, state.params), keep(opt_state, state.opt_state)
+    count = state.updates + ok.astype(jnp.int32)
+    copy = ok & (count % t.target_update_period == 0)
+    target = jax.tree.map(lambda a, b: jnp.where(copy, a, b), params, state.target_params)
+    replay = jax.lax.cond(ok, lambda r: replay_lib.update_priorities(r, index, td),
+                          lambda r: r, state.replay)
+    state = state.replace(params=params, target_params=target, opt_state=opt_state,
+                          replay=replay, updates=count,
+                          skipped_updates=state.skipped_updates + (~ok).astype(jnp.int32))
+    return state, jnp.where(ok, loss, 0.0)
+
+  # ---------------------------------------------------------------- one lockstep action
+  def step(self, state: TrainState, learn, epsilon) -> tuple[TrainState, StepLog]:
+    """Every environment acts once; with `learn`, the transition is stored and one update runs.
+
+    `epsilon` >= 0 overrides the schedule (0 for greedy evaluation); traced, like `learn`, so one
+    compiled program serves training and evaluation.
+    """
+    cfg, t = self.config, self.config.train
+    key, k_act, k_learn, k_reset = jax.random.split(state.key, 4)
+    eps = jnp.where(epsilon >= 0, epsilon, agent.epsilon_at(state.actions, t))
+    q = self.q_maps(state.params, state.obs)
+    action = agent.choose_actions(q, state.changed, eps, k_act, self.method)
+    env_states, info = jax.vmap(self.env.step)(
+        state.env, agent.to_world(action, state.obs.depth, self.views, cfg))
+    obs = self.observe(env_states)
+    healthy = info.healthy
+    changed = perception.change_observed(state.obs, obs, info.grasp_success, cfg.perception)
+    changed = changed & healthy
+    rew = jnp.where(healthy, agent.reward(action.primitive, info.grasp_success, changed), 0.0)
+    failures = jnp.where(agent.failed(action.primitive, info.grasp_success, changed),
+                         state.failures + 1, 0)
+    cleared = ~jnp.any(env_states.in_play, axis=1)
+    done = cleared | (failures > t.max_consecutive_failures) | ~healthy
+
+    transition = replay_lib.Transition(
+        obs=state.obs, primitive=action.primitive, rotation=action.rotation, row=action.row,
+        col=action.col, reward=rew, next_obs=_select(healthy, obs, state.obs), done=done,
+        changed=changed)
+    replay = jax.lax.cond(learn, lambda r: replay_lib.add(r, transition), lambda r: r,
+                          state.replay)
+    state = state.replace(replay=replay)
+    state, loss = jax.lax.cond(learn & (replay.size > 0), self.update,
+                               lambda s, k: (s, jnp.float32(0.0)), state, k_learn)
+
+    env_states, reserve = reserve_lib.swap_in(self.env, state.reserve, env_states, done, k_reset)
+    obs = jax.lax.cond(jnp.any(done), lambda: _select(done, self.observe(env_states), obs),
+                       lambda: obs)
+    b = done.shape[0]
+    state = state.replace(
+        env=env_states, reserve=reserve, obs=obs, changed=changed | done,
+        failures=jnp.where(done, 0, failures), key=key, actions=state.actions + b,
+        episodes=state.episodes + jnp.sum(done, dtype=jnp.int32))
+    log = StepLog(primitive=action.primitive, grasp_success=info.grasp_success, changed=changed,
+                  reward=rew, done=done, healthy=healthy, picked=info.picked, lost=info.lost,
+                  loss=loss, epsilon=eps)
+    return state, log
+
+  def iterate(self, state: TrainState, learn, epsilon) -> tuple[TrainState, StepLog]:
+    """`train.steps_per_iteration` lockstep actions in one `lax.scan` (StepLog gains a K axis)."""
+    return jax.lax.scan(lambda s, _: self.step(s, learn, epsilon), state, None,
+                        length=self.config.train.steps_per_iteration)

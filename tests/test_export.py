@@ -1,0 +1,218 @@
+"""Export (SPEC section 8): params.npz round trip, ONNX parity with onnxruntime on random and
+rendered heightmaps, the example script's action, and clear errors for bad work directories."""
+import dataclasses
+import importlib.util
+import json
+import pathlib
+import shutil
+import subprocess
+import sys
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from flax import nnx
+
+from mvcoba_jax import agent, export, perception
+from mvcoba_jax.checkpoint import Checkpoints
+from mvcoba_jax.config import METHODS, resolve, to_dict
+from mvcoba_jax.training import Trainer
+from tests.helpers import layout, stack
+
+ort = pytest.importorskip('onnxruntime')
+pytest.importorskip('jax2onnx')
+
+TINY = 'configs/tiny.py'
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+EXAMPLE = ROOT / 'examples' / 'onnx_infer.py'
+# Runs a script as __main__ and fails if anything imported JAX along the way.
+NO_JAX = '''
+import runpy, sys
+sys.argv = sys.argv[1:]
+try:
+  runpy.run_path(sys.argv[0], run_name='__main__')
+finally:
+  assert 'jax' not in sys.modules, 'the script imported JAX'
+'''
+CUBE, FLAT = 0, 2
+TOLERANCE = 1e-4
+
+
+def _example():
+  spec = importlib.util.spec_from_file_location('onnx_infer', EXAMPLE)
+  module = importlib.util.module_from_spec(spec)
+  spec.loader.exec_module(module)
+  return module
+
+
+@pytest.fixture(scope='module')
+def run(tmp_path_factory):
+  """A work directory as train.py leaves it, its checkpoint holding freshly initialised
+  parameters: training would compile MJX programs for minutes, and export reads only these."""
+  config = resolve(TINY)
+  trainer = Trainer(config)
+  like = jax.eval_shape(trainer.init, jax.random.PRNGKey(config.seed))
+  params = trainer.init_params(jax.random.PRNGKey(7))
+  state = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), like).replace(params=params)
+  workdir = tmp_path_factory.mktemp('run')
+  (workdir / 'config.json').write_text(json.dumps(to_dict(config), indent=1))
+  Checkpoints(workdir).save(8, state, {'config': to_dict(config), 'iteration': 4})
+  return trainer, workdir, params
+
+
+@pytest.fixture(scope='module')
+def exported(run, tmp_path_factory):
+  _, workdir, _ = run
+  paths = export.export(workdir, tmp_path_factory.mktemp('export'))
+  session = ort.InferenceSession(str(paths['onnx']), providers=['CPUExecutionProvider'])
+  return paths, json.loads(paths['model_json'].read_text()), session
+
+
+@pytest.fixture(scope='module')
+def states(run):
+  """name -> (color (1, V, R, R, 3), depth (1, V, R, R)): random, and rendered from a layout."""
+  env = run[0].env
+  side, views = perception.grid_size(env.config), len(env.config.scene.cameras)
+  kc, kd = jax.random.split(jax.random.PRNGKey(3))
+  random = (jax.random.uniform(kc, (1, views, side, side, 3)),
+            0.1 * jax.random.uniform(kd, (1, views, side, side)))
+  place = jax.jit(jax.vmap(env.place))  # as tests/test_perception.py: its compiled programs
+  look = jax.jit(jax.vmap(lambda s: perception.observe(env, s)))
+  obs = look(place(stack([layout(env, [(CUBE, -0.06, 0.04, 0.4), (FLAT, 0.05, -0.03, 0.0)])])))
+  return {'random': random, 'rendered': (obs.color, obs.depth)}
+
+
+@pytest.fixture(scope='module')
+def parity(run, exported, states):
+  """name -> (JAX Q maps, ONNX Q maps) of each state."""
+  trainer, _, params = run
+  forward = jax.jit(lambda c, d: nnx.merge(trainer.graphdef, params)(c, d))
+  session = exported[2]
+  return {name: (np.asarray(forward(c, d)),
+                 session.run(['q'], {'color': np.asarray(c), 'depth': np.asarray(d)})[0])
+          for name, (c, d) in states.items()}
+
+
+def jax_action(q, changed, depth, trainer):
+  """Greedy action and world point the way the training step picks and executes them."""
+  action = agent.choose_actions(jnp.asarray(q), jnp.array([changed]), 0.0,
+                                jax.random.PRNGKey(0), trainer.method)
+  world = agent.to_world(action, depth, trainer.views, trainer.config)
+  return {**{k: int(getattr(action, k)[0]) for k in ('primitive', 'rotation', 'row', 'col')},
+          **{k: float(getattr(world, k)[0]) for k in ('x', 'y', 'z')}}
+
+
+def test_params_npz_round_trips_the_checkpoint(run, exported):
+  _, _, params = run
+  paths, model, _ = exported
+  want = export.flat_params(nnx.merge(run[0].graphdef, params))
+  with np.load(paths['params']) as saved:
+    assert sorted(saved.files) == sorted(want) == sorted(model['params']['arrays'])
+    for name, array in want.items():
+      np.testing.assert_array_equal(saved[name], array, err_msg=name)
+      assert model['params']['arrays'][name] == {'shape': list(array.shape),
+                                                 'dtype': str(array.dtype)}
+  assert len(want) == len(jax.tree.leaves(params))
+
+
+def test_model_json_describes_frame_rotations_and_rule(exported):
+  model = exported[1]
+  assert model['heightmap']['grid_size'] == 56 and model['heightmap']['views_used'] == [0, 1]
+  assert model['rotations']['num_rotations'] == 16
+  np.testing.assert_allclose(model['rotations']['angles_rad'][4], np.pi / 2)
+  assert model['action_rule']['name'] == 'change'
+  assert model['onnx']['outputs'][0]['shape'] == [1, 2, 16, 56, 56]
+
+
+@pytest.mark.parametrize('name', ['random', 'rendered'])
+def test_onnx_matches_jax_forward_and_action(name, run, parity, states):
+  q_jax, q_onnx = parity[name]
+  assert q_onnx.shape == q_jax.shape
+  diff = float(np.abs(q_onnx - q_jax).max())
+  assert diff < TOLERANCE, f'{name}: max |ONNX - JAX| = {diff:.2e}'
+  example = _example()
+  model = {'primitives': {'push': 0, 'grasp': 1}, 'action_rule': export.action_rule('mvcoba')}
+  for changed in (False, True):
+    want = jax_action(q_jax, changed, states[name][1], run[0])
+    got = example.choose(q_onnx[0], changed, model)
+    assert {k: got[k] for k in ('primitive', 'rotation', 'row', 'col')} == {
+        k: want[k] for k in ('primitive', 'rotation', 'row', 'col')}
+
+
+@pytest.mark.parametrize('method', METHODS)
+def test_example_rule_is_the_agents_rule(method):
+  """Every method's rule as the example applies it from model.json, on the same Q maps."""
+  q = np.asarray(jax.random.normal(jax.random.PRNGKey(METHODS.index(method)), (1, 2, 4, 8, 8)))
+  example = _example()
+  model = {'primitives': {'push': 0, 'grasp': 1}, 'action_rule': export.action_rule(method)}
+  for changed in (False, True):
+    action = agent.choose_actions(jnp.asarray(q), jnp.array([changed]), 0.0,
+                                  jax.random.PRNGKey(0), method)
+    got = example.choose(q[0], changed, model)
+    assert [got[k] for k in ('primitive', 'rotation', 'row', 'col')] == [
+        int(getattr(action, k)[0]) for k in ('primitive', 'rotation', 'row', 'col')]
+
+
+def test_example_script_prints_the_jax_action_without_jax(run, exported, parity, states,
+                                                          tmp_path):
+  paths, _, _ = exported
+  color, depth = (np.asarray(a[0]) for a in states['rendered'])
+  state_path = tmp_path / 'state.npz'
+  np.savez(state_path, color=color, depth=depth)
+  for changed in (0, 1):
+    done = subprocess.run(
+        [sys.executable, '-c', NO_JAX,
+         str(EXAMPLE), '--model', str(paths['onnx'].parent), '--state', str(state_path),
+         '--changed', str(changed)],
+        capture_output=True, text=True, cwd=tmp_path, check=False)
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout.strip().splitlines()[-1])
+    want = jax_action(parity['rendered'][0], bool(changed), states['rendered'][1], run[0])
+    for k in ('primitive', 'rotation', 'row', 'col'):
+      assert got[k] == want[k], (k, got, want)
+    for k in ('x', 'y', 'z'):
+      assert abs(got[k] - want[k]) < 1e-6, (k, got, want)
+    assert got['primitive_name'] == ('grasp' if changed else 'push')
+
+
+def test_missing_work_directory_is_a_clear_error(tmp_path):
+  missing = tmp_path / 'nowhere'
+  with pytest.raises(export.ExportError, match='nowhere'):
+    export.export(missing, tmp_path / 'out')
+  done = subprocess.run([sys.executable, '-m', 'mvcoba_jax.export', '--checkpoint', str(missing),
+                         '--out', str(tmp_path / 'out')], capture_output=True, text=True,
+                        cwd=ROOT, check=False)
+  assert done.returncode == 2
+  assert str(missing) in done.stderr and 'Traceback' not in done.stderr
+  assert not (tmp_path / 'out').exists()
+
+
+def test_work_directory_without_checkpoints_is_a_clear_error(run, tmp_path, capsys):
+  workdir = tmp_path / 'fresh'
+  (workdir / 'checkpoints').mkdir(parents=True)
+  shutil.copy(run[1] / 'config.json', workdir / 'config.json')
+  with pytest.raises(export.ExportError, match='no checkpoint'):
+    export.load(workdir)
+  assert export.main(['--checkpoint', str(workdir), '--out', str(tmp_path / 'out')]) == 2
+  assert str(workdir / 'checkpoints') in capsys.readouterr().err
+
+
+def test_checkpoint_of_another_network_shape_is_a_clear_error(run, tmp_path, capsys):
+  workdir = tmp_path / 'other'
+  shutil.copytree(run[1], workdir)
+  config = dataclasses.replace(run[0].config, network=dataclasses.replace(
+      run[0].config.network, features=(8, 32)))
+  (workdir / 'config.json').write_text(json.dumps(to_dict(config)))
+  with pytest.raises(export.ExportError, match='network.features'):
+    export.load(workdir)
+  assert export.main(['--checkpoint', str(workdir), '--out', str(tmp_path / 'out')]) == 2
+  err = capsys.readouterr().err
+  assert 'network.features' in err and str(workdir / 'config.json') in err
+
+
+def test_config_round_trips_through_json(run):
+  config = run[0].config
+  assert export.config_from_dict(json.loads(json.dumps(to_dict(config)))) == config
+  with pytest.raises(export.ExportError, match='network: unknown keys width'):
+    export.config_from_dict({'network': {'width': 3}})

@@ -1,0 +1,98 @@
+"""The jitted training step, the learner, and train.py end to end on the tiny preset."""
+import json
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import train
+from mvcoba_jax import replay as replay_lib
+from mvcoba_jax.checkpoint import Checkpoints
+from mvcoba_jax.config import resolve
+from mvcoba_jax.training import Trainer
+
+TINY = 'configs/tiny.py'
+
+
+@pytest.fixture(scope='module')
+def trainer():
+  return Trainer(resolve(TINY))
+
+
+@pytest.fixture(scope='module')
+def trained(trainer):
+  """The state after two host iterations of real training (8 actions)."""
+  state = jax.jit(trainer.init)(jax.random.PRNGKey(0))
+  iterate = jax.jit(trainer.iterate)
+  logs = []
+  for _ in range(2):
+    state, log = iterate(state, jnp.bool_(True), jnp.float32(-1.0))
+    logs.append(log)
+  return state, logs
+
+
+def test_training_steps_fill_the_replay_and_update(trainer, trained):
+  state, logs = trained
+  b, k = trainer.config.num_envs, trainer.config.train.steps_per_iteration
+  assert int(state.actions) == 2 * b * k
+  assert int(state.replay.size) == 2 * b * k
+  assert int(state.updates) == 2 * k
+  assert int(state.skipped_updates) == 0
+  assert all(np.isfinite(np.asarray(log.loss)).all() for log in logs)
+  assert np.asarray(state.env.healthy).all()
+
+
+def test_loss_falls_on_a_fixed_replay_batch(trainer, trained):
+  state, _ = trained
+  key = jax.random.PRNGKey(3)
+  update = jax.jit(trainer.update)
+  losses = []
+  for _ in range(25):
+    state, loss = update(state, key)  # same key: the same sampled batch every time
+    losses.append(float(loss))
+  assert losses[-1] < 0.5 * losses[0], losses
+
+
+def test_non_finite_loss_leaves_parameters_untouched(trainer, trained):
+  state, _ = trained
+  poisoned = state.replace(replay=state.replay.replace(
+      data=state.replay.data.replace(reward=jnp.full_like(state.replay.data.reward, jnp.nan))))
+  after, loss = jax.jit(trainer.update)(poisoned, jax.random.PRNGKey(0))
+  assert float(loss) == 0.0
+  assert int(after.skipped_updates) == int(state.skipped_updates) + 1
+  for a, b in zip(jax.tree.leaves(after.params), jax.tree.leaves(state.params)):
+    np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
+def run(workdir, *extra):
+  return train.main(['--config', TINY, '--workdir', str(workdir), '--eval-actions', '2', *extra])
+
+
+def test_train_py_smoke_checkpoint_and_exact_resume(tmp_path):
+  straight, split = tmp_path / 'straight', tmp_path / 'split'
+  assert run(straight) == 0
+  for name in ('config.json', 'actions.jsonl', 'metrics.jsonl', 'curves.png',
+               'eval_summary.json'):
+    assert (straight / name).exists(), name
+  assert len((straight / 'actions.jsonl').read_text().splitlines()) == 8
+  assert run(split, '--set', 'train.total_actions=4') == 0
+  assert run(split, '--resume') == 0
+  trainer = Trainer(resolve(TINY))
+  like = jax.jit(trainer.init)(jax.random.PRNGKey(1))
+  config = resolve(TINY)
+  a, _ = Checkpoints(straight).restore(like, config)
+  b, _ = Checkpoints(split).restore(like, config)
+  assert int(a.actions) == int(b.actions) == 8
+  for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b)):
+    np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
+  records = [json.loads(line) for line in (split / 'actions.jsonl').read_text().splitlines()]
+  assert [r['action'] for r in records] == list(range(8))
+
+
+def test_checkpoint_of_another_network_shape_is_refused(tmp_path, capsys):
+  workdir = tmp_path / 'run'
+  assert run(workdir, '--set', 'train.total_actions=4') == 0
+  assert run(workdir, '--resume', '--set', 'network.features=4,8') == 2
+  err = capsys.readouterr().err
+  assert 'network.features' in err and 'another shape' in err
