@@ -142,7 +142,10 @@ def onnx_model(config: Config, model: networks.QNetwork):
   # jax2onnx's plugins for dm_pix, which the network does not use, fail to import under this
   # JAX and log a traceback each; they are skipped either way.
   logging.getLogger('jax2onnx.plugins.plugin_system').setLevel(logging.ERROR)
-  from jax2onnx import to_onnx
+  try:
+    from jax2onnx import to_onnx  # a dev extra: the rest of this module works without it
+  except ImportError as e:
+    raise ExportError(f'model.onnx needs jax2onnx ({e}); pip install -e ".[dev]"') from None
 
   graphdef, params = nnx.split(model)
   side, views = perception.grid_size(config), len(config.scene.cameras)
@@ -182,7 +185,7 @@ def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir) 
       'source': {'workdir': str(pathlib.Path(workdir).resolve()), 'checkpoint_step': step},
       'method': config.network.method,
       'network': dataclasses.asdict(config.network),
-      'config': dataclasses.asdict(config),
+      'config': config_lib.to_dict(config),
       'params': {'file': 'params.npz',
                  'arrays': {n: {'shape': list(a.shape), 'dtype': str(a.dtype)}
                             for n, a in params.items()},
@@ -208,11 +211,12 @@ def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir) 
           'file': 'model.onnx', 'opset': ONNX_OPSET, 'converter': 'jax2onnx',
           'inputs': [
               {'name': 'color', 'shape': [1, num_views, side, side, 3], 'dtype': 'float32',
-               'meaning': 'colour heightmaps of every camera view, RGB in 0..1, '
-                          '[0, view, row, col, channel]; views outside views_used are ignored'},
+               'meaning': 'colour heightmaps of every camera view, RGB in 0..1, [0, view, '
+                          'row, col, channel], 0 where the view saw nothing; views outside '
+                          'views_used are ignored'},
               {'name': 'depth', 'shape': [1, num_views, side, side], 'dtype': 'float32',
                'meaning': 'height above the table in metres, [0, view, row, col]; '
-                          'cells no camera saw read 0'}],
+                          '0 where the view saw nothing'}],
           'outputs': [
               {'name': 'q', 'shape': [1, 2, k, side, side], 'dtype': 'float32',
                'meaning': 'Q[0, primitive, rotation, row, col] in the heightmap frame (already '

@@ -22,6 +22,8 @@ from tests.helpers import layout, stack
 
 ort = pytest.importorskip('onnxruntime')
 pytest.importorskip('jax2onnx')
+# jax2onnx's GroupNorm plugin reads Variable.value, which Flax deprecates.
+pytestmark = pytest.mark.filterwarnings('ignore::DeprecationWarning:jax2onnx')
 
 TINY = 'configs/tiny.py'
 ROOT = pathlib.Path(__file__).resolve().parent.parent

@@ -1,0 +1,160 @@
+"""Evaluates trained policies (or a baseline) on test suites and prints the paper's tables.
+
+  python eval.py --checkpoint runs/train [runs/vpg ...] [--suite random|ordered|occluded|vpg|all|PATH ...]
+                 [--runs 5] [--max-actions 60] [--out eval_out]
+  python eval.py --baseline heuristic --suite ordered        # no checkpoint needed
+  python eval.py --compare runs/mvcoba runs/vpg ...          # same as several --checkpoint
+
+Every (case, run) pair of a suite runs in one jitted, vmapped call (cases padded to a common
+object-slot pool). One table per suite and metric: methods as rows, cases as columns (paper
+Tables 2-4); also written as JSON and Markdown to --out.
+"""
+from __future__ import annotations
+
+import argparse
+import collections
+import dataclasses
+import json
+import math
+import pathlib
+import sys
+import time
+
+import jax
+import numpy as np
+from flax import nnx
+
+from envs.scenarios import ScenarioError, case_to_layout, read_case, stack_layouts
+from envs.tabletop import Tabletop
+from mvcoba_jax import config as config_lib
+from mvcoba_jax import evaluation, metrics, networks
+from mvcoba_jax.export import ExportError, load
+from mvcoba_jax.runtime import REPO_ROOT, enable_compilation_cache
+
+SUITES = ('random', 'ordered', 'occluded', 'vpg')
+METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action efficiency (%)'),
+           ('completion', 'completion (%)'), ('grasp_to_push', 'grasp-to-push ratio'))
+
+
+def suite_files(names: list[str], vpg_dir: pathlib.Path) -> dict[str, list[pathlib.Path]]:
+  """Suite name -> its case files; a PATH (file or folder) is a suite of its own."""
+  if 'all' in names:
+    names = [n for n in names if n != 'all'] + list(SUITES)
+  out = {}
+  for name in dict.fromkeys(names):
+    if name in SUITES:
+      folder = vpg_dir if name == 'vpg' else REPO_ROOT / 'suites' / name
+      files = sorted(folder.glob('*.txt' if name == 'vpg' else '*.scn'))
+    else:
+      path = pathlib.Path(name)
+      files = sorted(p for p in path.iterdir() if p.suffix in ('.scn', '.txt')) \
+          if path.is_dir() else [path]
+    if not files or not all(f.is_file() for f in files):
+      raise ScenarioError(f'suite {name!r}: no case files found')
+    out[name] = files
+  return out
+
+
+def pool_for(cases) -> tuple[tuple[str, int], ...]:
+  """The smallest object-slot pool that holds every case of a suite."""
+  need = collections.Counter()
+  for case in cases:
+    for shape, count in collections.Counter(o.shape for o in case.objects).items():
+      need[shape] = max(need[shape], count)
+  return tuple(sorted(need.items()))
+
+
+def suite_config(config, pool):
+  """`config` with the suite's pool and contact limits that grow with it."""
+  slots = sum(n for _, n in pool)
+  scene = dataclasses.replace(config.scene, pool=pool,
+                              max_contact_points=max(config.scene.max_contact_points, 10 * slots),
+                              max_geom_pairs=max(config.scene.max_geom_pairs, 2 * slots))
+  return dataclasses.replace(config, scene=scene)
+
+
+def make_policy(method_source, config):
+  """(name, policy factory for an env, views) of a checkpoint or a baseline."""
+  if isinstance(method_source, str):  # a baseline
+    policy = evaluation.heuristic_policy(config.env.num_rotations)
+    return f'baseline:{method_source}', policy, (0, 1)
+  config, model, step = method_source
+  graphdef, params = nnx.split(model)
+  method = config.network.method
+  q_maps = lambda obs: nnx.merge(graphdef, params)(obs.color, obs.depth)
+  return method, evaluation.greedy_policy(q_maps, method), networks.views_used(method)
+
+
+def table(rows: dict[str, dict[str, dict]], key: str, label: str, cases: list[str]) -> str:
+  """A Markdown table: methods as rows, cases (and their mean) as columns."""
+  head = f'| {label} | ' + ' | '.join(cases) + ' | mean |\n|---|' + '---|' * (len(cases) + 1)
+  lines = [head]
+  for method, result in rows.items():
+    cells = [result['cases'][c][key] for c in cases] + [result['mean'][key]]
+    lines.append(f'| {method} | ' + ' | '.join('-' if not math.isfinite(v) else f'{v:.1f}'
+                                                for v in cells) + ' |')
+  return '\n'.join(lines)
+
+
+def main(argv=None) -> int:
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  config_lib.add_arguments(parser)
+  parser.add_argument('--checkpoint', '--compare', nargs='+', default=[],
+                      help='work directories of train.py runs')
+  parser.add_argument('--baseline', choices=('heuristic',),
+                      help='a policy that needs no checkpoint')
+  parser.add_argument('--suite', nargs='+', default=['all'],
+                      help=f'{", ".join(SUITES)}, all, or paths of case files/folders')
+  parser.add_argument('--runs', type=int, default=5, help='runs per case')
+  parser.add_argument('--max-actions', type=int, default=60, help='action cap per run')
+  parser.add_argument('--vpg-dir', default=str(REPO_ROOT.parent / 'shared' / 'vpg-test-cases'))
+  parser.add_argument('--out', default='eval_out', help='folder for JSON and Markdown tables')
+  parser.add_argument('--seed', type=int, default=0)
+  args = parser.parse_args(argv)
+  if not args.checkpoint and not args.baseline:
+    parser.error('give --checkpoint DIR ... or --baseline heuristic')
+  try:  # everything that can be wrong with the input fails here, before any compile
+    base = config_lib.from_arguments(args)
+    suites = {name: [read_case(f) for f in files]
+              for name, files in suite_files(args.suite, pathlib.Path(args.vpg_dir)).items()}
+    sources = [load(d) for d in args.checkpoint] + ([args.baseline] if args.baseline else [])
+  except (config_lib.ConfigError, ScenarioError, ExportError) as e:
+    print(f'error: {e}', file=sys.stderr)
+    return 2
+  enable_compilation_cache()
+  out = pathlib.Path(args.out)
+  out.mkdir(parents=True, exist_ok=True)
+  report, markdown = {}, []
+  for suite, cases in suites.items():
+    names = [c.name for c in cases]
+    rows = {}
+    for source in sources:
+      config = base if isinstance(source, str) else source[0]
+      env = Tabletop(suite_config(config, pool_for(cases)))
+      method, policy, views = make_policy(source, env.config)
+      layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(args.runs)])
+      keys = jax.random.split(jax.random.PRNGKey(args.seed), len(cases) * args.runs)
+      print(f'{suite}: {method}, {len(cases)} cases x {args.runs} runs, up to '
+            f'{args.max_actions} actions each; compiling and running...', flush=True)
+      start = time.perf_counter()
+      runs = jax.jit(lambda l, k: evaluation.evaluate(env, policy, views, l, k, args.max_actions))(
+          layouts, keys)
+      logs = evaluation.run_logs(runs)
+      per_case = {name: metrics.case_metrics(logs[i * args.runs:(i + 1) * args.runs])
+                  for i, name in enumerate(names)}
+      rows[method] = {'cases': per_case, 'mean': metrics.suite_average(per_case),
+                      'wall_s': time.perf_counter() - start}
+      print(f'  done in {rows[method]["wall_s"]:.0f} s', flush=True)
+    report[suite] = rows
+    for key, label in METRICS:
+      text = f'### {suite}: {label}\n\n' + table(rows, key, label, names)
+      markdown.append(text)
+      print('\n' + text)
+  (out / 'results.json').write_text(json.dumps(report, indent=1))
+  (out / 'results.md').write_text('\n\n'.join(markdown) + '\n')
+  print(f'\nwrote {out / "results.json"} and {out / "results.md"}')
+  return 0
+
+
+if __name__ == '__main__':
+  sys.exit(main())

@@ -1,0 +1,56 @@
+"""The paper's evaluation metrics (SPEC section 7) from per-run counts.
+
+Per run: actions executed, grasp attempts, successful grasps, objects in the case, objects
+picked, and whether the run completed (every object picked without more than the allowed
+consecutive failures). Rates are percentages, as in the paper's tables.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+
+@dataclasses.dataclass(frozen=True)
+class RunLog:
+  actions: int
+  grasp_attempts: int
+  grasp_successes: int
+  objects: int
+  picked: int
+  lost: int
+  completed: bool
+
+
+def case_metrics(runs: list[RunLog]) -> dict:
+  """Metrics of the runs of one case.
+
+  grasp success = successful grasps / grasp attempts (over all runs);
+  action efficiency = objects in the case / actions, over completed runs (NaN if none completed);
+  completion = share of runs that picked every object;
+  grasp-to-push ratio = grasp attempts / pushes (inf when nothing was pushed).
+  """
+  attempts = sum(r.grasp_attempts for r in runs)
+  successes = sum(r.grasp_successes for r in runs)
+  completed = [r for r in runs if r.completed]
+  actions = sum(r.actions for r in runs)
+  pushes = actions - attempts
+  return {
+      'grasp_success': 100.0 * successes / attempts if attempts else float('nan'),
+      'action_efficiency': (100.0 * sum(r.objects for r in completed)
+                            / sum(r.actions for r in completed)) if completed else float('nan'),
+      'completion': 100.0 * len(completed) / len(runs),
+      'grasp_to_push': attempts / pushes if pushes else float('inf'),
+      'runs': len(runs), 'actions': actions,
+  }
+
+
+def suite_average(per_case: dict[str, dict]) -> dict:
+  """Mean of each metric over the cases (NaN cases are skipped, as a missing table cell)."""
+  keys = ('grasp_success', 'action_efficiency', 'completion', 'grasp_to_push')
+  out = {}
+  for k in keys:
+    values = np.array([m[k] for m in per_case.values()], float)
+    finite = values[np.isfinite(values)]
+    out[k] = float(finite.mean()) if finite.size else float('nan')
+  return out

@@ -1,0 +1,34 @@
+"""The evaluation metrics on hand-made run logs, against hand-computed values."""
+import math
+
+from mvcoba_jax.metrics import RunLog, case_metrics, suite_average
+
+
+def test_case_metrics_by_hand():
+  runs = [RunLog(actions=5, grasp_attempts=4, grasp_successes=4, objects=4, picked=4, lost=0,
+                 completed=True),  # one push, four clean grasps
+          RunLog(actions=10, grasp_attempts=8, grasp_successes=4, objects=4, picked=4, lost=0,
+                 completed=True),
+          RunLog(actions=7, grasp_attempts=6, grasp_successes=0, objects=4, picked=0, lost=0,
+                 completed=False)]
+  m = case_metrics(runs)
+  assert m['grasp_success'] == 100.0 * 8 / 18
+  assert m['action_efficiency'] == 100.0 * 8 / 15
+  assert m['completion'] == 100.0 * 2 / 3
+  assert m['grasp_to_push'] == 18 / 4
+  assert m['runs'] == 3 and m['actions'] == 22
+
+
+def test_nothing_completed_and_no_pushes():
+  m = case_metrics([RunLog(6, 6, 0, 3, 0, 0, False)])
+  assert math.isnan(m['action_efficiency']) and m['completion'] == 0.0
+  assert m['grasp_to_push'] == math.inf and m['grasp_success'] == 0.0
+
+
+def test_suite_average_skips_missing_cells():
+  avg = suite_average({'a': {'grasp_success': 50.0, 'action_efficiency': float('nan'),
+                             'completion': 0.0, 'grasp_to_push': 2.0},
+                       'b': {'grasp_success': 100.0, 'action_efficiency': 80.0,
+                             'completion': 100.0, 'grasp_to_push': 4.0}})
+  assert avg == {'grasp_success': 75.0, 'action_efficiency': 80.0, 'completion': 50.0,
+                 'grasp_to_push': 3.0}
