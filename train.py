@@ -22,7 +22,7 @@ import numpy as np
 from tqdm import tqdm
 
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import curves
+from mvcoba_jax import curves, sharding
 from mvcoba_jax.checkpoint import CheckpointError, Checkpoints
 from mvcoba_jax.runtime import enable_compilation_cache
 from mvcoba_jax.training import Trainer
@@ -37,6 +37,9 @@ def parse(argv):
   parser.add_argument('--seed', type=int, help='sets seed')
   parser.add_argument('--workdir', default='runs/train', help='output folder')
   parser.add_argument('--resume', action='store_true', help='continue from the latest checkpoint')
+  parser.add_argument('--distributed', action='store_true',
+                      help='join the other hosts with jax.distributed.initialize() (cluster '
+                           'settings from the environment) before anything else')
   parser.add_argument('--eval-actions', type=int, default=40,
                       help='greedy actions (over all environments) in the closing evaluation')
   args = parser.parse_args(argv)
@@ -98,11 +101,19 @@ def plot_curves(workdir: pathlib.Path, records: list[dict], config) -> pathlib.P
 
 def main(argv=None) -> int:
   args, config = parse(argv)
+  if args.distributed:
+    jax.distributed.initialize()
   workdir = pathlib.Path(args.workdir)
   workdir.mkdir(parents=True, exist_ok=True)
   enable_compilation_cache()
   trainer = Trainer(config)
   checkpoints = Checkpoints(workdir)
+  devices = sharding.mesh()
+  try:
+    sharding.check_divisible(config.num_envs, devices)
+  except ValueError as e:
+    print(f'error: {e}', file=sys.stderr)
+    return 2
   iterate = jax.jit(trainer.iterate)
   per_iteration = config.num_envs * config.train.steps_per_iteration
 
@@ -129,6 +140,8 @@ def main(argv=None) -> int:
     write_records(actions_path, [], 'w')
     metrics_path.write_text('')
   (workdir / 'config.json').write_text(json.dumps(config_lib.to_dict(config), indent=1))
+  if devices.devices.size > 1:  # data parallel: environments and replay split over the devices
+    state = sharding.place(state, devices)
 
   total = config.train.total_actions
   start = time.perf_counter()

@@ -10,7 +10,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from envs.tabletop import EnvState, Tabletop
+from envs.tabletop import EnvState, Tabletop, where_envs
 
 
 @struct.dataclass
@@ -39,9 +39,7 @@ def swap_in(env: Tabletop, reserve: Reserve, states: EnvState, mask, key):
   rank = jnp.cumsum(mask) - 1
   source = jnp.clip(reserve.available - 1 - rank, 0, 2 * batch - 1)
   drawn = jax.tree.map(lambda x: x[source], reserve.states)
-  merged = jax.tree.map(
-      lambda new, old: jnp.where(mask.reshape(mask.shape + (1,) * (new.ndim - 1)), new, old),
-      drawn, states)
+  merged = where_envs(mask, drawn, states)
   merged = merged.replace(
       health_resets=states.health_resets + (mask & ~states.healthy).astype(jnp.int32))
   return merged, reserve.replace(available=reserve.available - jnp.sum(mask, dtype=jnp.int32))

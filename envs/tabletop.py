@@ -53,6 +53,12 @@ class StepInfo:
   healthy: jnp.ndarray  # bool
 
 
+def where_envs(mask, new, old):
+  """Per-environment choice between two batched pytrees: `new` where `mask` (B,) holds."""
+  return jax.tree.map(
+      lambda a, b: jnp.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b), new, old)
+
+
 class Tabletop:
   """Static description of the environment; its methods are pure functions of the state."""
 
@@ -228,9 +234,7 @@ class Tabletop:
     def redraw(states):
       keys = jax.vmap(jax.random.split)(states.key)
       fresh = jax.vmap(self.reset)(keys[:, 1])
-      merged = jax.tree.map(
-          lambda new, old: jnp.where(mask.reshape(mask.shape + (1,) * (new.ndim - 1)), new, old),
-          fresh, states)
+      merged = where_envs(mask, fresh, states)
       counted = states.health_resets + (mask & ~states.healthy).astype(jnp.int32)
       return merged.replace(health_resets=counted, key=keys[:, 0])
     return jax.lax.cond(jnp.any(mask), redraw, lambda s: s, states)

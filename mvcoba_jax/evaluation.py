@@ -14,7 +14,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from envs.tabletop import Layout, Tabletop
+from envs.tabletop import Layout, Tabletop, where_envs
 from mvcoba_jax import agent, perception
 from mvcoba_jax.geometry import quat_mul, yaw_quat
 from mvcoba_jax.metrics import RunLog
@@ -89,10 +89,7 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
         lost=count(runs.lost, info.lost), failures=jnp.where(active, failures, runs.failures),
         finished=runs.finished | cleared | (failures > max_failures) | ~info.healthy,
         completed=runs.completed | (active & cleared & (picked == runs.objects)))
-    keep = lambda new, old: jax.tree.map(
-        lambda a, b: jnp.where(active.reshape(active.shape + (1,) * (a.ndim - 1)), a, b),
-        new, old)
-    return (keep(next_states, states), keep(next_obs, obs),
+    return (where_envs(active, next_states, states), where_envs(active, next_obs, obs),
             jnp.where(active, now_changed, changed), runs, keys, t + 1)
 
   def cond(carry):

@@ -14,7 +14,7 @@ import optax
 from flax import nnx, struct
 
 from envs import reserve as reserve_lib
-from envs.tabletop import EnvState, Tabletop
+from envs.tabletop import EnvState, Tabletop, where_envs
 from mvcoba_jax import agent, networks, perception, replay as replay_lib
 from mvcoba_jax.config import Config
 
@@ -50,12 +50,6 @@ class StepLog:
   lost: jnp.ndarray
   loss: jnp.ndarray  # scalar: the update's loss (0 when no update ran)
   epsilon: jnp.ndarray  # scalar
-
-
-def _select(mask, new, old):
-  """Per-environment choice between two batched pytrees."""
-  return jax.tree.map(
-      lambda a, b: jnp.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b), new, old)
 
 
 def _all_finite(tree):
@@ -167,7 +161,7 @@ class Trainer:
 
     transition = replay_lib.Transition(
         obs=state.obs, primitive=action.primitive, rotation=action.rotation, row=action.row,
-        col=action.col, reward=rew, next_obs=_select(healthy, obs, state.obs), done=done,
+        col=action.col, reward=rew, next_obs=where_envs(healthy, obs, state.obs), done=done,
         changed=changed)
     replay = jax.lax.cond(learn, lambda r: replay_lib.add(r, transition), lambda r: r,
                           state.replay)
@@ -176,7 +170,7 @@ class Trainer:
                                lambda s, k: (s, jnp.float32(0.0)), state, k_learn)
 
     env_states, reserve = reserve_lib.swap_in(self.env, state.reserve, env_states, done, k_reset)
-    obs = jax.lax.cond(jnp.any(done), lambda: _select(done, self.observe(env_states), obs),
+    obs = jax.lax.cond(jnp.any(done), lambda: where_envs(done, self.observe(env_states), obs),
                        lambda: obs)
     b = done.shape[0]
     state = state.replace(

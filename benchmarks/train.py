@@ -1,0 +1,98 @@
+"""Training-step throughput and where its time goes: physics, rendering, network.
+
+Prints one JSON object: for each batch size B, the compile time and the steady-state wall time
+of the jitted training iteration (actions/s, updates/s), and the time of its parts measured
+alone on the same states: the batched primitive (physics), render + heightmaps (rendering),
+the 16-rotation forward for acting plus one SGD update (network).
+
+  python benchmarks/train.py [--config configs/default.py] [--batch 1 8 32] [--repeats 2]
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import pathlib
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import jax  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+import numpy as np  # noqa: E402
+
+from mvcoba_jax import agent  # noqa: E402
+from mvcoba_jax.config import resolve  # noqa: E402
+from mvcoba_jax.training import Trainer  # noqa: E402
+
+
+def timed(fn, *args, repeats=1):
+  """(output, first call s, median later call s)."""
+  t = time.perf_counter()
+  out = jax.block_until_ready(fn(*args))
+  first = time.perf_counter() - t
+  runs = []
+  for _ in range(repeats):
+    t = time.perf_counter()
+    jax.block_until_ready(fn(*args))
+    runs.append(time.perf_counter() - t)
+  return out, first, float(np.median(runs))
+
+
+def bench(config, batch: int, repeats: int) -> dict:
+  config = dataclasses.replace(config, num_envs=batch)
+  trainer = Trainer(config)
+  state, init_first, _ = timed(jax.jit(trainer.init), jax.random.PRNGKey(0), repeats=0)
+  args = (jnp.bool_(True), jnp.float32(-1.0))
+  state, it_first, it_wall = timed(jax.jit(trainer.iterate), state, *args, repeats=repeats)
+  k = config.train.steps_per_iteration
+
+  q = jax.jit(trainer.q_maps)
+  _, _, forward = timed(q, state.params, state.obs, repeats=repeats)
+  action = agent.choose_actions(q(state.params, state.obs), state.changed, 0.0,
+                                jax.random.PRNGKey(1), trainer.method)
+  world = agent.to_world(action, state.obs.depth, trainer.views, config)
+  _, _, physics = timed(jax.jit(jax.vmap(trainer.env.step)), state.env, world, repeats=repeats)
+  _, _, rendering = timed(jax.jit(trainer.observe), state.env, repeats=repeats)
+  _, _, update = timed(jax.jit(trainer.update), state, jax.random.PRNGKey(2), repeats=repeats)
+  return {
+      'batch': batch, 'init_first_call_s': init_first,
+      'iteration_compile_s': it_first - it_wall, 'iteration_wall_s': it_wall,
+      'actions_per_s': batch * k / it_wall, 'updates_per_s': k / it_wall,
+      'per_action_step_s': {'physics': physics, 'rendering': rendering,
+                            'network_act_forward': forward, 'network_update': update},
+  }
+
+
+def main():
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument('--config', default=str(ROOT / 'configs' / 'default.py'))
+  parser.add_argument('--batch', type=int, nargs='+', default=[1, 8, 32])
+  parser.add_argument('--repeats', type=int, default=2)
+  args = parser.parse_args()
+  config = resolve(args.config)
+  rows = []
+  for b in args.batch:
+    rows.append(bench(config, b, args.repeats))
+    print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
+  for r in rows:
+    parts = r['per_action_step_s']
+    total = sum(parts.values())
+    r['share_of_parts'] = {k: v / total for k, v in parts.items()}
+    r['actions_per_s_vs_smallest_batch'] = r['actions_per_s'] / rows[0]['actions_per_s']
+  print(json.dumps({'benchmark': 'train', 'config': args.config,
+                    'settings': {'method': config.network.method,
+                                 'steps_per_iteration': config.train.steps_per_iteration,
+                                 'batch_size': config.train.batch_size,
+                                 'grid': round(2 * config.scene.workspace_half
+                                               / config.perception.heightmap_resolution),
+                                 'jax': jax.__version__, 'device': str(jax.devices()[0]),
+                                 'cpu_count': os.cpu_count()},
+                    'results': rows}, indent=1))
+
+
+if __name__ == '__main__':
+  main()
