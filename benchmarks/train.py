@@ -39,7 +39,7 @@ def timed(fn, *args, repeats=1):
     t = time.perf_counter()
     jax.block_until_ready(fn(*args))
     runs.append(time.perf_counter() - t)
-  return out, first, float(np.median(runs))
+  return out, first, float(np.median(runs)) if runs else float('nan')
 
 
 def bench(config, batch: int, repeats: int) -> dict:
