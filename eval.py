@@ -65,12 +65,16 @@ def pool_for(cases) -> tuple[tuple[str, int], ...]:
 
 
 def suite_config(config, pool):
-  """`config` with the suite's pool and contact limits that grow with it."""
+  """`config` with the suite's pool and contact limits that grow with it.
+
+  Random drops (`env.num_objects`) play no part in evaluation; they only have to fit the pool.
+  """
   slots = sum(n for _, n in pool)
   scene = dataclasses.replace(config.scene, pool=pool,
                               max_contact_points=max(config.scene.max_contact_points, 10 * slots),
                               max_geom_pairs=max(config.scene.max_geom_pairs, 2 * slots))
-  return dataclasses.replace(config, scene=scene)
+  env = dataclasses.replace(config.env, num_objects=min(config.env.num_objects, slots))
+  return dataclasses.replace(config, scene=scene, env=env)
 
 
 def make_policy(method_source, config):

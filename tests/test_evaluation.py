@@ -60,6 +60,11 @@ def test_vmapped_evaluation_equals_cases_one_by_one(setup):
       assert (np.asarray(a) == np.asarray(b)[i]).all()
 
 
+def test_suite_pool_smaller_than_the_training_drops_is_fine():
+  config = eval_cli.suite_config(resolve('configs/default.py'), (('cube', 2),))
+  assert Tabletop(config).num_slots == 2 and config.env.num_objects == 2
+
+
 def test_malformed_case_fails_with_file_and_line_before_compiling(tmp_path, capsys):
   bad = tmp_path / 'bad.scn'
   bad.write_text('cube red 0.0 0.0 0\ncube red zero 0.0 0\n')
