@@ -215,6 +215,30 @@ def to_dict(config) -> dict:
   return dataclasses.asdict(config)
 
 
+def from_dict(data: dict, cls=Config, where: str = 'config'):
+  """The frozen `cls` dataclass of a `config.to_dict` dict (as JSON holds it: lists for tuples).
+
+  Missing fields keep their defaults, so older config.json files still load; unknown ones fail.
+  """
+  fields = {f.name for f in dataclasses.fields(cls)}
+  unknown = sorted(set(data) - fields)
+  if unknown:
+    raise ConfigError(f'{where}: unknown keys {", ".join(unknown)} for {cls.__name__}')
+  hints = typing.get_type_hints(cls)
+  return cls(**{k: _value(v, hints[k], f'{where}.{k}') for k, v in data.items()})
+
+
+def _value(value, tp, where: str):
+  if dataclasses.is_dataclass(tp):
+    return from_dict(value, tp, where)
+  if typing.get_origin(tp) is tuple:
+    args = typing.get_args(tp)
+    if len(args) == 2 and args[1] is Ellipsis:
+      args = (args[0],) * len(value)
+    return tuple(_value(v, a, f'{where}[{i}]') for i, (v, a) in enumerate(zip(value, args)))
+  return value
+
+
 def add_arguments(parser) -> None:
   """The `--config` and `--set` options every entry point takes."""
   parser.add_argument('--config', default=None,

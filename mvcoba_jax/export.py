@@ -17,7 +17,6 @@ import json
 import logging
 import pathlib
 import sys
-import typing
 from unittest import mock
 
 import jax
@@ -41,30 +40,6 @@ class ExportError(RuntimeError):
   """A work directory that cannot be exported; the message names the path or config keys."""
 
 
-def config_from_dict(data: dict, cls=Config, where: str = 'config'):
-  """The frozen `cls` dataclass of a `config.to_dict` dict (as JSON holds it: lists for tuples).
-
-  Missing fields keep their defaults, so older config.json files still load; unknown ones fail.
-  """
-  fields = {f.name for f in dataclasses.fields(cls)}
-  unknown = sorted(set(data) - fields)
-  if unknown:
-    raise ExportError(f'{where}: unknown keys {", ".join(unknown)} for {cls.__name__}')
-  hints = typing.get_type_hints(cls)
-  return cls(**{k: _value(v, hints[k], f'{where}.{k}') for k, v in data.items()})
-
-
-def _value(value, tp, where: str):
-  if dataclasses.is_dataclass(tp):
-    return config_from_dict(value, tp, where)
-  if typing.get_origin(tp) is tuple:
-    args = typing.get_args(tp)
-    if len(args) == 2 and args[1] is Ellipsis:
-      args = (args[0],) * len(value)
-    return tuple(_value(v, a, f'{where}[{i}]') for i, (v, a) in enumerate(zip(value, args)))
-  return value
-
-
 def load(workdir) -> tuple[Config, networks.QNetwork, int]:
   """(config from config.json, Q-network, step) of the latest checkpoint in `workdir`.
 
@@ -80,7 +55,7 @@ def load(workdir) -> tuple[Config, networks.QNetwork, int]:
   if not (workdir / 'checkpoints').is_dir():  # Checkpoints() would create it
     raise ExportError(f'no checkpoints in {workdir / "checkpoints"}')
   try:
-    config = config_from_dict(json.loads(config_path.read_text()), where=str(config_path))
+    config = config_lib.from_dict(json.loads(config_path.read_text()), where=str(config_path))
   except (ValueError, TypeError) as e:  # bad JSON or values that do not fit the fields
     raise ExportError(f'{config_path}: {e}') from None
   checkpoints = Checkpoints(workdir)

@@ -16,7 +16,7 @@ from flax import nnx
 
 from mvcoba_jax import agent, export, perception
 from mvcoba_jax.checkpoint import Checkpoints
-from mvcoba_jax.config import METHODS, resolve, to_dict
+from mvcoba_jax.config import METHODS, ConfigError, from_dict, resolve, to_dict
 from mvcoba_jax.training import Trainer
 from tests.helpers import layout, stack
 
@@ -215,6 +215,6 @@ def test_checkpoint_of_another_network_shape_is_a_clear_error(run, tmp_path, cap
 
 def test_config_round_trips_through_json(run):
   config = run[0].config
-  assert export.config_from_dict(json.loads(json.dumps(to_dict(config)))) == config
-  with pytest.raises(export.ExportError, match='network: unknown keys width'):
-    export.config_from_dict({'network': {'width': 3}})
+  assert from_dict(json.loads(json.dumps(to_dict(config)))) == config
+  with pytest.raises(ConfigError, match='network: unknown keys width'):
+    from_dict({'network': {'width': 3}})
