@@ -106,14 +106,14 @@ def main(argv=None) -> int:
   workdir = pathlib.Path(args.workdir)
   workdir.mkdir(parents=True, exist_ok=True)
   enable_compilation_cache()
-  trainer = Trainer(config)
-  checkpoints = Checkpoints(workdir)
   devices = sharding.mesh()
   try:
     sharding.check_divisible(config.num_envs, devices)
   except ValueError as e:
     print(f'error: {e}', file=sys.stderr)
     return 2
+  trainer = Trainer(config, devices)
+  checkpoints = Checkpoints(workdir)
   iterate = jax.jit(trainer.iterate)
   per_iteration = config.num_envs * config.train.steps_per_iteration
 

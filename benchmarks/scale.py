@@ -25,8 +25,8 @@ from mvcoba_jax.config import resolve
 from mvcoba_jax.training import Trainer
 config = resolve(sys.argv[1])
 iterations = int(sys.argv[2])
-trainer = Trainer(config)
 mesh = sharding.mesh()
+trainer = Trainer(config, mesh)
 state = sharding.place(jax.jit(trainer.init)(jax.random.PRNGKey(0)), mesh)
 iterate = jax.jit(trainer.iterate)
 args = (jnp.bool_(True), jnp.float32(-1.0))

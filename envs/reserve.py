@@ -10,7 +10,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from envs.tabletop import EnvState, Tabletop, where_envs
+from envs.tabletop import EnvState, where_envs
 
 
 @struct.dataclass
@@ -20,21 +20,23 @@ class Reserve:
   available: jnp.ndarray  # int32
 
 
-def _refill(env: Tabletop, reserve: Reserve, key, batch: int) -> Reserve:
-  fresh = jax.vmap(env.reset)(jax.random.split(key, batch))
+def _refill(reset_batch, reserve: Reserve, key, batch: int) -> Reserve:
+  fresh = reset_batch(jax.random.split(key, batch))
   states = jax.tree.map(
       lambda all_, new: jax.lax.dynamic_update_slice_in_dim(all_, new, reserve.available, 0),
       reserve.states, fresh)
   return Reserve(states=states, available=reserve.available + batch)
 
 
-def swap_in(env: Tabletop, reserve: Reserve, states: EnvState, mask, key):
+def swap_in(reset_batch, reserve: Reserve, states: EnvState, mask, key):
   """(states, reserve): every environment in `mask` gets a fresh tabletop from the reserve.
+
+  `reset_batch` maps B keys to B fresh states (`jax.vmap(env.reset)`, or its per-device form).
 
   Unhealthy environments swapped out are counted in `health_resets`, which carries over.
   """
   batch = mask.shape[0]
-  reserve = jax.lax.cond(reserve.available < batch, lambda r: _refill(env, r, key, batch),
+  reserve = jax.lax.cond(reserve.available < batch, lambda r: _refill(reset_batch, r, key, batch),
                          lambda r: r, reserve)
   rank = jnp.cumsum(mask) - 1
   source = jnp.clip(reserve.available - 1 - rank, 0, 2 * batch - 1)

@@ -1,9 +1,10 @@
 """Data parallelism over all local devices: environments and replay sharded, parameters replicated.
 
 The training step is written for one device; placing its state with these shardings lets XLA
-partition it (GSPMD): each device steps its share of the environments and holds its share of
-the replay, and the loss, a mean over the sampled batch, gets its gradients averaged across
-devices by the compiler. On one CPU, `XLA_FLAGS=--xla_force_host_platform_device_count=N`
+partition it (GSPMD): each device steps its share of the environments (`Trainer.per_env`) and
+holds its share of the replay, and the loss, a mean over the sampled batch, gets its gradients
+averaged across devices by the compiler. The step's outputs must come back with the shardings
+they went in with, or every call compiles the step again. On one CPU, `XLA_FLAGS=--xla_force_host_platform_device_count=N`
 makes N virtual devices.
 """
 from __future__ import annotations
@@ -25,8 +26,8 @@ def state_shardings(state: TrainState, mesh_: Mesh) -> TrainState:
   whole = NamedSharding(mesh_, PartitionSpec())
   n = mesh_.devices.size
 
-  def along_first(tree):
-    return jax.tree.map(lambda x: split if x.ndim and x.shape[0] % n == 0 else whole, tree)
+  def along_first(tree):  # zero-size arrays come out of a jitted step replicated: keep them so
+    return jax.tree.map(lambda x: split if x.size and x.shape[0] % n == 0 else whole, tree)
 
   everything = jax.tree.map(lambda _: whole, state)
   return everything.replace(

@@ -12,6 +12,7 @@ import jax
 import jax.numpy as jnp
 import optax
 from flax import nnx, struct
+from jax.sharding import Mesh, PartitionSpec
 
 from envs import reserve as reserve_lib
 from envs.tabletop import EnvState, Tabletop, where_envs
@@ -57,10 +58,16 @@ def _all_finite(tree):
 
 
 class Trainer:
-  """Static parts of training (environment, network graph, optimiser); methods are pure."""
+  """Static parts of training (environment, network graph, optimiser); methods are pure.
 
-  def __init__(self, config: Config):
+  With a `mesh` of several devices the state must be placed with `sharding.place`: physics,
+  rendering and resets then run per device on its share of the environments (`shard_map`), and
+  XLA partitions the rest (acting, replay, the update with its gradient reduction).
+  """
+
+  def __init__(self, config: Config, mesh: Mesh | None = None):
     self.config = config
+    self.mesh = mesh if mesh is not None and mesh.devices.size > 1 else None
     self.env = Tabletop(config)
     self.method = config.network.method
     self.views = networks.views_used(self.method)
@@ -79,8 +86,19 @@ class Trainer:
                                    nnx.Rngs(params=key))
     return nnx.split(model)[1]
 
+  def per_env(self, fn):
+    """`fn` over a batch of environments, run by each device on its own share when sharded.
+
+    Environments are independent, so nothing crosses devices and XLA's partitioner has nothing
+    to decide inside the physics' loops.
+    """
+    if self.mesh is None:
+      return fn
+    return jax.shard_map(fn, mesh=self.mesh, in_specs=PartitionSpec('data'),
+                         out_specs=PartitionSpec('data'), check_vma=False)
+
   def observe(self, env_states):
-    return jax.vmap(lambda s: perception.observe(self.env, s))(env_states)
+    return self.per_env(jax.vmap(lambda s: perception.observe(self.env, s)))(env_states)
 
   # ---------------------------------------------------------------- state
   def init(self, key) -> TrainState:
@@ -147,7 +165,7 @@ class Trainer:
     eps = jnp.where(epsilon >= 0, epsilon, agent.epsilon_at(state.actions, t))
     q = self.q_maps(state.params, state.obs)
     action = agent.choose_actions(q, state.changed, eps, k_act, self.method)
-    env_states, info = jax.vmap(self.env.step)(
+    env_states, info = self.per_env(jax.vmap(self.env.step))(
         state.env, agent.to_world(action, state.obs.depth, self.views, cfg))
     obs = self.observe(env_states)
     healthy = info.healthy
@@ -169,7 +187,8 @@ class Trainer:
     state, loss = jax.lax.cond(learn & (replay.size > 0), self.update,
                                lambda s, k: (s, jnp.float32(0.0)), state, k_learn)
 
-    env_states, reserve = reserve_lib.swap_in(self.env, state.reserve, env_states, done, k_reset)
+    env_states, reserve = reserve_lib.swap_in(self.per_env(jax.vmap(self.env.reset)),
+                                              state.reserve, env_states, done, k_reset)
     obs = jax.lax.cond(jnp.any(done), lambda: where_envs(done, self.observe(env_states), obs),
                        lambda: obs)
     b = done.shape[0]

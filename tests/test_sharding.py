@@ -20,15 +20,18 @@ from mvcoba_jax import sharding
 from mvcoba_jax.config import resolve
 from mvcoba_jax.training import Trainer
 assert len(jax.devices()) == 2, jax.devices()
-trainer = Trainer(resolve('configs/tiny.py', ['train.steps_per_iteration=1']))
+config = resolve('configs/tiny.py', ['train.steps_per_iteration=1'])
+trainer, sharded = Trainer(config), Trainer(config, sharding.mesh())
 state = jax.jit(trainer.init)(jax.random.PRNGKey(0))
-iterate = jax.jit(trainer.iterate)
 args = (jnp.bool_(True), jnp.float32(-1.0))
-one, log_one = iterate(jax.device_put(state, jax.devices()[0]), *args)
+one, log_one = jax.jit(trainer.iterate)(jax.device_put(state, jax.devices()[0]), *args)
 placed = sharding.place(state, sharding.mesh())
 assert len(placed.env.data.qpos.sharding.device_set) == 2
+iterate = jax.jit(sharded.iterate)
 two, log_two = iterate(placed, *args)
 assert len(two.env.data.qpos.sharding.device_set) == 2, 'environments left the mesh'
+iterate(two, *args)  # the state comes back sharded as it went in: no second compilation
+assert iterate._cache_size() == 1, 'the sharded step compiled again for its own output'
 np.testing.assert_array_equal(np.asarray(log_one.grasp_success), np.asarray(log_two.grasp_success))
 np.testing.assert_array_equal(np.asarray(log_one.primitive), np.asarray(log_two.primitive))
 np.testing.assert_allclose(np.asarray(log_one.loss), np.asarray(log_two.loss), rtol=2e-2)
