@@ -1,13 +1,14 @@
 """Evaluates trained policies (or a baseline) on test suites and prints the paper's tables.
 
   python eval.py --checkpoint runs/train [runs/vpg ...] [--suite random|ordered|occluded|vpg|all|PATH ...]
-                 [--runs 5] [--max-actions 60] [--out eval_out]
+                 [--runs 5] [--max-actions 60] [--out eval_out] [--save-visuals]
   python eval.py --baseline heuristic --suite ordered        # no checkpoint needed
   python eval.py --compare runs/mvcoba runs/vpg ...          # same as several --checkpoint
 
 Every (case, run) pair of a suite runs in one jitted, vmapped call (cases padded to a common
 object-slot pool). One table per suite and metric: methods as rows, cases as columns (paper
-Tables 2-4); also written as JSON and Markdown to --out.
+Tables 2-4); also written as JSON and Markdown to --out. With --save-visuals, each run also gets
+a PNG strip of its heightmaps and actions in --out/visuals/SUITE/METHOD/.
 """
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ from flax import nnx
 from envs.scenarios import ScenarioError, case_to_layout, read_case, stack_layouts
 from envs.tabletop import Tabletop
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import evaluation, metrics, networks
+from mvcoba_jax import evaluation, metrics, networks, viz
 from mvcoba_jax.export import ExportError, load
 from mvcoba_jax.runtime import REPO_ROOT, enable_compilation_cache
 
@@ -89,6 +90,20 @@ def make_policy(method_source, config):
   return method, evaluation.greedy_policy(q_maps, method), networks.views_used(method)
 
 
+def row_labels(directories: list[str], methods: list[str]) -> list[str]:
+  """Table rows of the checkpoints: the method, with the run's folder when a method repeats."""
+  repeated = {m for m in methods if methods.count(m) > 1}
+  return [f'{m} ({pathlib.Path(d).name})' if m in repeated else m
+          for d, m in zip(directories, methods)]
+
+
+def json_safe(tree):
+  """`tree` with NaN and infinities (undefined metrics) as null, which JSON can hold."""
+  if isinstance(tree, dict):
+    return {k: json_safe(v) for k, v in tree.items()}
+  return None if isinstance(tree, float) and not math.isfinite(tree) else tree
+
+
 def table(rows: dict[str, dict[str, dict]], key: str, label: str, cases: list[str]) -> str:
   """A Markdown table: methods as rows, cases (and their mean) as columns."""
   head = f'| {label} | ' + ' | '.join(cases) + ' | mean |\n|---|' + '---|' * (len(cases) + 1)
@@ -114,6 +129,8 @@ def main(argv=None) -> int:
   parser.add_argument('--vpg-dir', default=str(REPO_ROOT.parent / 'shared' / 'vpg-test-cases'))
   parser.add_argument('--out', default='eval_out', help='folder for JSON and Markdown tables')
   parser.add_argument('--seed', type=int, default=0)
+  parser.add_argument('--save-visuals', action='store_true',
+                      help='write a PNG strip of heightmaps and actions per run')
   args = parser.parse_args(argv)
   if not args.checkpoint and not args.baseline:
     parser.error('give --checkpoint DIR ... or --baseline heuristic')
@@ -122,6 +139,8 @@ def main(argv=None) -> int:
     suites = {name: [read_case(f) for f in files]
               for name, files in suite_files(args.suite, pathlib.Path(args.vpg_dir)).items()}
     sources = [load(d) for d in args.checkpoint] + ([args.baseline] if args.baseline else [])
+    labels = row_labels(args.checkpoint, [s[0].network.method for s in sources
+                                          if not isinstance(s, str)])
   except (config_lib.ConfigError, ScenarioError, ExportError) as e:
     print(f'error: {e}', file=sys.stderr)
     return 2
@@ -132,18 +151,25 @@ def main(argv=None) -> int:
   for suite, cases in suites.items():
     names = [c.name for c in cases]
     rows = {}
-    for source in sources:
+    for i, source in enumerate(sources):
       config = base if isinstance(source, str) else source[0]
       env = Tabletop(suite_config(config, pool_for(cases)))
       method, policy, views = make_policy(source, env.config)
+      method = labels[i] if i < len(labels) else method
       layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(args.runs)])
       keys = jax.random.split(jax.random.PRNGKey(args.seed), len(cases) * args.runs)
       print(f'{suite}: {method}, {len(cases)} cases x {args.runs} runs, up to '
             f'{args.max_actions} actions each; compiling and running...', flush=True)
       start = time.perf_counter()
-      runs = jax.jit(lambda l, k: evaluation.evaluate(env, policy, views, l, k, args.max_actions))(
-          layouts, keys)
+      runs = jax.jit(lambda l, k: evaluation.evaluate(env, policy, views, l, k, args.max_actions,
+                                                      record=args.save_visuals))(layouts, keys)
       logs = evaluation.run_logs(runs)
+      if args.save_visuals:
+        folder = out / 'visuals' / pathlib.Path(suite).name / method.replace(':', '_')
+        viz.write_run_strips(jax.device_get(runs.trace),
+                             [f'{n}_run{r}' for n in names for r in range(args.runs)], folder,
+                             env.config)
+        print(f'  visuals in {folder}', flush=True)
       per_case = {name: metrics.case_metrics(logs[i * args.runs:(i + 1) * args.runs])
                   for i, name in enumerate(names)}
       rows[method] = {'cases': per_case, 'mean': metrics.suite_average(per_case),
@@ -154,7 +180,7 @@ def main(argv=None) -> int:
       text = f'### {suite}: {label}\n\n' + table(rows, key, label, names)
       markdown.append(text)
       print('\n' + text)
-  (out / 'results.json').write_text(json.dumps(report, indent=1))
+  (out / 'results.json').write_text(json.dumps(json_safe(report), indent=1))
   (out / 'results.md').write_text('\n\n'.join(markdown) + '\n')
   print(f'\nwrote {out / "results.json"} and {out / "results.md"}')
   return 0

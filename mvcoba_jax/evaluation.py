@@ -28,8 +28,20 @@ Policy = Callable[[perception.Observation, jnp.ndarray, jnp.ndarray], agent.Pixe
 
 
 @struct.dataclass
+class Trace:
+  """What each run saw and did, step by step (N, T, ...): for pictures of the runs."""
+  color: jnp.ndarray  # (N, T, V, R, R, 3) uint8: every view's colour heightmap before the action
+  primitive: jnp.ndarray  # (N, T) int32
+  rotation: jnp.ndarray
+  row: jnp.ndarray
+  col: jnp.ndarray
+  grasp_success: jnp.ndarray  # (N, T) bool
+  active: jnp.ndarray  # (N, T) bool: the run had not finished, so the step counts
+
+
+@struct.dataclass
 class Runs:
-  """Per-run counters (N,)."""
+  """Per-run counters (N,), and the step-by-step `trace` when it was recorded."""
   actions: jnp.ndarray
   grasp_attempts: jnp.ndarray
   grasp_successes: jnp.ndarray
@@ -39,6 +51,7 @@ class Runs:
   failures: jnp.ndarray  # consecutive failed actions
   finished: jnp.ndarray
   completed: jnp.ndarray
+  trace: Trace | None = None
 
 
 def jitter(layout: Layout, key) -> Layout:
@@ -54,18 +67,29 @@ def jitter(layout: Layout, key) -> Layout:
 
 
 def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Layout, keys,
-             max_actions: int, max_failures: int = 5) -> Runs:
-  """Runs the greedy `policy` from each layout (N,) with its key (N,); returns the counters."""
+             max_actions: int, max_failures: int = 5, record: bool = False) -> Runs:
+  """Runs the greedy `policy` from each layout (N,) with its key (N,); returns the counters.
+
+  With `record`, `Runs.trace` holds every step's heightmaps and action (memory grows with
+  N x max_actions x views x R^2 x 3 bytes).
+  """
   config = env.config
   observe = jax.vmap(lambda s: perception.observe(env, s))
   k_start, k_loop = jax.vmap(jax.random.split, out_axes=1)(keys)
   states = jax.vmap(env.reset_from_case)(jax.vmap(jitter)(layouts, k_start), k_start)
+  obs = observe(states)
   n = layouts.in_play.shape[0]
   zeros = jnp.zeros(n, jnp.int32)
   runs = Runs(actions=zeros, grasp_attempts=zeros, grasp_successes=zeros, picked=zeros,
               lost=zeros, objects=jnp.sum(states.in_play, axis=1, dtype=jnp.int32),
               failures=zeros, finished=jnp.zeros(n, bool), completed=jnp.zeros(n, bool))
-  carry = (states, observe(states), jnp.ones(n, bool), runs, k_loop, jnp.int32(0))
+  if record:
+    steps = lambda dtype: jnp.zeros((n, max_actions), dtype)
+    runs = runs.replace(trace=Trace(
+        color=jnp.zeros((n, max_actions) + obs.color.shape[1:], jnp.uint8),
+        primitive=steps(jnp.int32), rotation=steps(jnp.int32), row=steps(jnp.int32),
+        col=steps(jnp.int32), grasp_success=steps(bool), active=steps(bool)))
+  carry = (states, obs, jnp.ones(n, bool), runs, k_loop, jnp.int32(0))
 
   def body(carry):
     states, obs, changed, runs, keys, t = carry
@@ -89,6 +113,15 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
         lost=count(runs.lost, info.lost), failures=jnp.where(active, failures, runs.failures),
         finished=runs.finished | cleared | (failures > max_failures) | ~info.healthy,
         completed=runs.completed | (active & cleared & (picked == runs.objects)))
+    if record:
+      color = jnp.round(jnp.clip(obs.color, 0.0, 1.0) * 255).astype(jnp.uint8)
+      at = lambda buf, x: buf.at[:, t].set(x)
+      trace = runs.trace
+      runs = runs.replace(trace=trace.replace(
+          color=at(trace.color, color), primitive=at(trace.primitive, action.primitive),
+          rotation=at(trace.rotation, action.rotation), row=at(trace.row, action.row),
+          col=at(trace.col, action.col), grasp_success=at(trace.grasp_success, info.grasp_success),
+          active=at(trace.active, active)))
     return (where_envs(active, next_states, states), where_envs(active, next_obs, obs),
             jnp.where(active, now_changed, changed), runs, keys, t + 1)
 

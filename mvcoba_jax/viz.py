@@ -1,4 +1,4 @@
-"""Pictures of what the robot sees: raw camera images and both views' heightmaps, as PNGs.
+"""Pictures of what the robot sees and does: camera images, heightmaps, and strips of runs.
 
   python -m mvcoba_jax.viz CASE [--out viz/] [--settle] [--config ...] [--set ...]
 
@@ -17,10 +17,15 @@ import numpy as np
 
 from envs import cameras
 from envs.scenarios import ScenarioError, case_to_layout, read_case
+from envs.scene import MAX_OPENING
 from envs.tabletop import Tabletop
 from mvcoba_jax import config as config_lib
 from mvcoba_jax import perception
+from mvcoba_jax.geometry import rotation_angle
 from mvcoba_jax.runtime import enable_compilation_cache
+
+# Action markers (BGR): a push, a grasp that lifted an object, a grasp that did not.
+PUSH_COLOR, GRASP_OK_COLOR, GRASP_FAILED_COLOR = (255, 160, 0), (0, 200, 0), (0, 0, 230)
 
 
 def _rgb_png(rgb: np.ndarray) -> np.ndarray:
@@ -49,6 +54,45 @@ def write_pictures(env: Tabletop, state, out: pathlib.Path, scale: int = 4) -> l
     big = cv2.resize(picture, None, fx=scale, fy=scale, interpolation=cv2.INTER_NEAREST)
     cv2.imwrite(str(out / name), big)
     paths.append(out / name)
+  return paths
+
+
+def run_strip(trace, run: int, config: config_lib.Config, scale: int = 3) -> np.ndarray:
+  """One run as a left-to-right strip of its steps, each the views' colour heightmaps stacked
+  top to bottom with the action drawn on them: a push as an arrow along its direction, a grasp
+  as a bar across the fingers' closing line (green if it lifted an object, red if not)."""
+  cell = config.perception.heightmap_resolution
+  push_length, finger_span = config.env.push_length / cell * scale, MAX_OPENING / cell * scale
+  frames = []
+  for t in np.flatnonzero(np.asarray(trace.active[run])):
+    views = [cv2.resize(np.ascontiguousarray(v[..., ::-1]), None, fx=scale, fy=scale,
+                        interpolation=cv2.INTER_NEAREST) for v in np.asarray(trace.color[run, t])]
+    yaw = float(rotation_angle(int(trace.rotation[run, t]), config.env.num_rotations))
+    centre = np.array([trace.col[run, t] + 0.5, trace.row[run, t] + 0.5]) * scale
+    if int(trace.primitive[run, t]) == 1:  # grasp: the fingers close along (-sin, cos)
+      half = finger_span / 2 * np.array([-np.sin(yaw), np.cos(yaw)])
+      ends = (centre - half, centre + half)
+      color = GRASP_OK_COLOR if bool(trace.grasp_success[run, t]) else GRASP_FAILED_COLOR
+    else:  # push: from the pixel along (cos, sin)
+      ends = (centre, centre + push_length * np.array([np.cos(yaw), np.sin(yaw)]))
+      color = PUSH_COLOR
+    a, b = (tuple(int(round(v)) for v in e) for e in ends)
+    for view in views:
+      cv2.circle(view, a, scale + 1, color, -1)
+      (cv2.arrowedLine if color == PUSH_COLOR else cv2.line)(view, a, b, color, 2)
+    frames.append(np.concatenate(views, axis=0))
+    frames.append(np.full((frames[-1].shape[0], 4, 3), 255, np.uint8))  # separator
+  return np.concatenate(frames[:-1], axis=1) if frames else np.zeros((1, 1, 3), np.uint8)
+
+
+def write_run_strips(trace, names: list[str], out: pathlib.Path,
+                     config: config_lib.Config) -> list[pathlib.Path]:
+  """A PNG strip per run (`names[i]` names run i's file)."""
+  out.mkdir(parents=True, exist_ok=True)
+  paths = []
+  for i, name in enumerate(names):
+    paths.append(out / f'{name}.png')
+    cv2.imwrite(str(paths[-1]), run_strip(trace, i, config))
   return paths
 
 

@@ -1,4 +1,7 @@
 """Evaluation end to end on the tiny preset: cases loaded, run, scored; vmapped == one by one."""
+import json
+
+import cv2
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -7,7 +10,7 @@ import pytest
 import eval as eval_cli
 from envs.scenarios import case_to_layout, read_case, stack_layouts
 from envs.tabletop import Tabletop
-from mvcoba_jax import evaluation, metrics
+from mvcoba_jax import evaluation, metrics, viz
 from mvcoba_jax.config import resolve
 
 CASES = {
@@ -75,11 +78,42 @@ def test_malformed_case_fails_with_file_and_line_before_compiling(tmp_path, caps
   assert 'bad.scn:2' in err and "'x'" in err
 
 
-def test_eval_cli_writes_tables(setup, tmp_path, capsys):
+def test_eval_cli_writes_tables_and_visuals(setup, tmp_path):
   folder = setup[0]
   code = eval_cli.main(['--baseline', 'heuristic', '--suite', str(folder), '--config',
                         'configs/tiny.py', '--runs', '1', '--max-actions', str(MAX_ACTIONS),
-                        '--out', str(tmp_path / 'out')])
+                        '--out', str(tmp_path / 'out'), '--save-visuals'])
   assert code == 0
   text = (tmp_path / 'out' / 'results.md').read_text()
   assert 'grasp success' in text and 'pair' in text and 'baseline:heuristic' in text
+  report = json.loads((tmp_path / 'out' / 'results.json').read_text())
+  actions = report[str(folder)]['baseline:heuristic']['cases']['pair']['actions']
+  strips = sorted((tmp_path / 'out' / 'visuals' / folder.name / 'baseline_heuristic').glob('*.png'))
+  assert [p.name for p in strips] == ['pair_run0.png', 'three_run0.png']
+  image = cv2.imread(str(strips[0]))
+  side = image.shape[0] // 2  # two views stacked, each a square heightmap scaled up
+  assert image.shape[1] == actions * (side + 4) - 4
+
+
+def test_run_strip_draws_each_action_where_it_was_taken():
+  """A grasp that lifted at a known cell is a green bar there; a failed one is red; a push is an
+  arrow pointing along its direction."""
+  config = resolve('configs/tiny.py')
+  r, scale = 56, 3
+  steps = lambda *v: np.array([v])
+  trace = evaluation.Trace(
+      color=np.zeros((1, 3, 2, r, r, 3), np.uint8), primitive=steps(1, 1, 0),
+      rotation=steps(0, 0, 0), row=steps(10, 30, 40), col=steps(20, 30, 10),
+      grasp_success=steps(True, False, False), active=steps(True, True, True))
+  image = viz.run_strip(trace, 0, config, scale=scale)
+  width = r * scale
+  assert image.shape == (2 * width, 3 * width + 2 * 4, 3)
+  frame = lambda t, view: image[view * width:(view + 1) * width, t * (width + 4):t * (width + 4) + width]
+  for view in (0, 1):
+    assert (frame(0, view)[10 * scale + 1, 20 * scale + 1] == viz.GRASP_OK_COLOR).all()
+    assert (frame(1, view)[30 * scale + 1, 30 * scale + 1] == viz.GRASP_FAILED_COLOR).all()
+    push = np.all(frame(2, view) == viz.PUSH_COLOR, axis=-1)
+    rows, cols = np.nonzero(push)
+    assert cols.min() >= 10 * scale - 5 and cols.max() > 20 * scale  # rotation 0 points to +x
+    assert np.ptp(rows) < 4 * scale
+  assert not np.any(np.all(frame(0, 0) == viz.GRASP_FAILED_COLOR, axis=-1))
