@@ -19,6 +19,7 @@ import time
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax.experimental import multihost_utils
 from tqdm import tqdm
 
 from mvcoba_jax import config as config_lib
@@ -38,11 +39,17 @@ def parse(argv):
   parser.add_argument('--workdir', default='runs/train', help='output folder')
   parser.add_argument('--resume', action='store_true', help='continue from the latest checkpoint')
   parser.add_argument('--distributed', action='store_true',
-                      help='join the other hosts with jax.distributed.initialize() (cluster '
-                           'settings from the environment) before anything else')
+                      help='join the other processes with jax.distributed.initialize() before '
+                           'anything else; cluster settings come from the environment (SLURM, '
+                           'Kubernetes, ...) unless given below')
+  parser.add_argument('--coordinator', help='with --distributed: HOST:PORT of process 0')
+  parser.add_argument('--num-processes', type=int, help='with --distributed: processes in all')
+  parser.add_argument('--process-id', type=int, help='with --distributed: this process, 0..N-1')
   parser.add_argument('--eval-actions', type=int, default=40,
                       help='greedy actions (over all environments) in the closing evaluation')
   args = parser.parse_args(argv)
+  if not args.distributed and (args.coordinator or args.num_processes or args.process_id):
+    parser.error('--coordinator, --num-processes and --process-id need --distributed')
   overrides = list(args.overrides)
   if args.method:
     overrides.append(f'network.method={args.method}')
@@ -59,7 +66,9 @@ def parse(argv):
 
 def action_records(log, first_action: int) -> list[dict]:
   """One JSON record per action of a (K, B) StepLog, numbered over all environments."""
-  log = jax.tree.map(np.asarray, log)
+  # With several processes each holds its own environments' part; gather the whole batch.
+  log = multihost_utils.process_allgather(log, tiled=True) if jax.process_count() > 1 \
+      else jax.tree.map(np.asarray, log)
   k, b = log.primitive.shape
   return [{'action': first_action + i * b + e, 'env': e,
            'primitive': PRIMITIVE_NAMES[int(log.primitive[i, e])],
@@ -102,7 +111,8 @@ def plot_curves(workdir: pathlib.Path, records: list[dict], config) -> pathlib.P
 def main(argv=None) -> int:
   args, config = parse(argv)
   if args.distributed:
-    jax.distributed.initialize()
+    jax.distributed.initialize(coordinator_address=args.coordinator,
+                               num_processes=args.num_processes, process_id=args.process_id)
   workdir = pathlib.Path(args.workdir)
   workdir.mkdir(parents=True, exist_ok=True)
   enable_compilation_cache()
@@ -113,7 +123,8 @@ def main(argv=None) -> int:
     print(f'error: {e}', file=sys.stderr)
     return 2
   trainer = Trainer(config, devices)
-  checkpoints = Checkpoints(workdir)
+  checkpoints = Checkpoints(workdir)  # every process takes part in saving its shards
+  lead = jax.process_index() == 0  # the one process that writes logs and curves
   iterate = jax.jit(trainer.iterate)
   per_iteration = config.num_envs * config.train.steps_per_iteration
 
@@ -129,7 +140,8 @@ def main(argv=None) -> int:
       print(f'error: {e}', file=sys.stderr)
       return 2
     records = read_records(actions_path, int(state.actions))
-    write_records(actions_path, records, 'w')
+    if lead:
+      write_records(actions_path, records, 'w')
     print(f'resumed from {checkpoints.directory} at action {int(state.actions)}')
   else:
     if checkpoints.latest() is not None:
@@ -137,9 +149,11 @@ def main(argv=None) -> int:
             file=sys.stderr)
       return 2
     records = []
-    write_records(actions_path, [], 'w')
-    metrics_path.write_text('')
-  (workdir / 'config.json').write_text(json.dumps(config_lib.to_dict(config), indent=1))
+    if lead:
+      write_records(actions_path, [], 'w')
+      metrics_path.write_text('')
+  if lead:
+    (workdir / 'config.json').write_text(json.dumps(config_lib.to_dict(config), indent=1))
   if devices.devices.size > 1:  # data parallel: environments and replay split over the devices
     state = sharding.place(state, devices)
 
@@ -147,13 +161,12 @@ def main(argv=None) -> int:
   start = time.perf_counter()
   done_before = int(state.actions)
   iteration = done_before // per_iteration
-  bar = tqdm(total=total, initial=done_before, unit='action', desc='training')
+  bar = tqdm(total=total, initial=done_before, unit='action', desc='training', disable=not lead)
   while int(state.actions) < total:
     t0 = time.perf_counter()
     state, log = iterate(state, jnp.bool_(True), jnp.float32(-1.0))
     new = action_records(log, int(state.actions) - per_iteration)
     records += new
-    write_records(actions_path, new, 'a')
     iteration += 1
     so_far = summary(records)
     rate = (int(state.actions) - done_before) / (time.perf_counter() - start)
@@ -163,16 +176,19 @@ def main(argv=None) -> int:
             'updates': int(state.updates), 'skipped_updates': int(state.skipped_updates),
             'health_resets': int(state.env.health_resets.sum()),
             'grasp_success': so_far['grasp_success']}
-    write_records(metrics_path, [line], 'a')
+    if lead:
+      write_records(actions_path, new, 'a')
+      write_records(metrics_path, [line], 'a')
     bar.update(per_iteration)
     bar.set_postfix(actions_per_s=f'{rate:.2f}', grasp=f'{so_far["grasp_success"]:.2f}',
                     eps=f'{line["epsilon"]:.2f}', loss=f'{line["loss"]:.3f}')
     if iteration % config.train.checkpoint_every == 0 or int(state.actions) >= total:
       checkpoints.save(int(state.actions), state,
                        {'config': config_lib.to_dict(config), 'iteration': iteration})
-      plot_curves(workdir, records, config)
+      if lead:
+        plot_curves(workdir, records, config)
   bar.close()
-  curve = plot_curves(workdir, records, config)
+  curve = plot_curves(workdir, records, config) if lead else None
   train_summary = summary(records)
   print(f'training: {json.dumps(train_summary)}; wall {time.perf_counter() - start:.0f} s; '
         f'curves {curve}')
@@ -184,7 +200,8 @@ def main(argv=None) -> int:
     evaluation, log = iterate(evaluation, jnp.bool_(False), jnp.float32(0.0))
     eval_records += action_records(log, first)
   result = summary(eval_records)
-  (workdir / 'eval_summary.json').write_text(json.dumps(result, indent=1))
+  if lead:
+    (workdir / 'eval_summary.json').write_text(json.dumps(result, indent=1))
   print(f'greedy evaluation on random drops: {json.dumps(result)}')
   return 0
 

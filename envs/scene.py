@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 
+import jax
 import mujoco
 import numpy as np
 from mujoco import mjx
@@ -190,5 +191,6 @@ def build_scene(scene: SceneConfig) -> Scene:
   if scene.num_slots == 0:
     raise ValueError('scene.pool holds no object slots')
   mj_model = mujoco.MjModel.from_xml_string(build_mjcf(scene))
-  model = mjx.put_model(mj_model, impl='jax')
+  # This process's own device: jax.devices()[0], MJX's default, may belong to another process.
+  model = mjx.put_model(mj_model, device=jax.local_devices()[0], impl='jax')
   return Scene(mj_model=mj_model, model=model, index=_index(mj_model, scene), config=scene)

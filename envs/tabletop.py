@@ -178,7 +178,7 @@ class Tabletop:
     """The objects of `layout` exactly where it puts them, without physics (for pictures)."""
     if key is None:
       key = jax.random.PRNGKey(0)
-    data = mjx.make_data(self.model)
+    data = mjx.make_data(self.model, device=jax.local_devices()[0])
     qpos = data.qpos.at[self._qpos_idx].set(
         jnp.where(layout.in_play[:, None], jnp.concatenate([layout.pos, layout.quat], 1),
                   self._park_qpos))
