@@ -4,8 +4,8 @@ The training step is written for one device; placing its state with these shardi
 partition it (GSPMD): each device steps its share of the environments (`Trainer.per_env`) and
 holds its share of the replay, and the loss, a mean over the sampled batch, gets its gradients
 averaged across devices by the compiler. The step's outputs must come back with the shardings
-they went in with, or every call compiles the step again. On one CPU, `XLA_FLAGS=--xla_force_host_platform_device_count=N`
-makes N virtual devices.
+they went in with, or every call compiles the step again. On one CPU,
+`XLA_FLAGS=--xla_force_host_platform_device_count=N` makes N virtual devices.
 """
 from __future__ import annotations
 

@@ -34,8 +34,8 @@ def test_two_processes_train_as_one(tmp_path):
   outputs = [p.communicate(timeout=1500)[0] for p in processes]
   for p, out in zip(processes, outputs):
     assert p.returncode == 0, out[-3000:]
-  summaries = [[line for line in out.splitlines() if line.startswith('training: {')][0].split(';')[0]
-               for out in outputs]
+  summaries = [next(line for line in out.splitlines() if line.startswith('training: {'))
+               .split(';')[0] for out in outputs]
   assert summaries[0] == summaries[1]  # both processes saw every environment's actions
   records = [json.loads(line) for line in (workdir / 'actions.jsonl').read_text().splitlines()]
   assert [r['action'] for r in records] == [0, 1, 2, 3] and {r['env'] for r in records} == {0, 1}

@@ -108,7 +108,8 @@ def test_run_strip_draws_each_action_where_it_was_taken():
   image = viz.run_strip(trace, 0, config, scale=scale)
   width = r * scale
   assert image.shape == (2 * width, 3 * width + 2 * 4, 3)
-  frame = lambda t, view: image[view * width:(view + 1) * width, t * (width + 4):t * (width + 4) + width]
+  frame = lambda t, view: image[view * width:(view + 1) * width,
+                                t * (width + 4):t * (width + 4) + width]
   for view in (0, 1):
     assert (frame(0, view)[10 * scale + 1, 20 * scale + 1] == viz.GRASP_OK_COLOR).all()
     assert (frame(1, view)[30 * scale + 1, 30 * scale + 1] == viz.GRASP_FAILED_COLOR).all()
