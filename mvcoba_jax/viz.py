@@ -78,7 +78,7 @@ def run_strip(trace, run: int, config: config_lib.Config, scale: int = 3) -> np.
       color = PUSH_COLOR
     a, b = (tuple(int(round(v)) for v in e) for e in ends)
     for view in views:
-      cv2.circle(view, a, scale + 1, color, -1)
+      cv2.circle(view, tuple(int(round(v)) for v in centre), scale + 1, color, -1)
       (cv2.arrowedLine if color == PUSH_COLOR else cv2.line)(view, a, b, color, 2)
     frames.append(np.concatenate(views, axis=0))
     frames.append(np.full((frames[-1].shape[0], 4, 3), 255, np.uint8))  # separator
