@@ -224,25 +224,6 @@ class Tabletop:
                           healthy=healthy)
     return state, info
 
-  # ----------------------------------------------------------------------------- health
-  def reset_where(self, states: EnvState, mask) -> EnvState:
-    """Batched: redraws the environments in `mask` (fresh random drops); the others carry on.
-
-    Unhealthy ones are counted in `health_resets`. The reset runs only when some environment
-    needs it.
-    """
-    def redraw(states):
-      keys = jax.vmap(jax.random.split)(states.key)
-      fresh = jax.vmap(self.reset)(keys[:, 1])
-      merged = where_envs(mask, fresh, states)
-      counted = states.health_resets + (mask & ~states.healthy).astype(jnp.int32)
-      return merged.replace(health_resets=counted, key=keys[:, 0])
-    return jax.lax.cond(jnp.any(mask), redraw, lambda s: s, states)
-
-  def heal(self, states: EnvState) -> EnvState:
-    """Batched: redraws every unhealthy environment and counts it."""
-    return self.reset_where(states, ~states.healthy)
-
   # ----------------------------------------------------------------------------- queries
   def object_positions(self, state: EnvState):
     """(M, 3) centre of every slot of one environment (parked slots report their parking spot)."""

@@ -1,7 +1,7 @@
 """Drops objects on B tabletops, runs a few grasps and pushes in lockstep, prints what happened.
 
-The main job until training lands. Actions are aimed at objects from their true poses (no
-perception yet): grasps on the top of a random object in play, pushes from 5 cm beside it.
+A look at the physics alone, without perception or learning: actions are aimed at objects from
+their true poses (grasps on the top of a random object in play, pushes from 5 cm beside it).
 
   python -m mvcoba_jax.demo [--config configs/default.py] [--set num_envs=4] [--actions 4]
 """
@@ -55,7 +55,6 @@ def main(argv=None) -> int:
         'Compiling reset and step (1-2 min each on a CPU the first time; cached after).')
   reset = jax.jit(jax.vmap(env.reset))
   step = jax.jit(jax.vmap(env.step))
-  heal = jax.jit(env.heal)
   key = jax.random.PRNGKey(config.seed)
   key, k_reset = jax.random.split(key)
   t0 = time.perf_counter()
@@ -68,7 +67,6 @@ def main(argv=None) -> int:
     primitive = primitives.GRASP if i % 2 == 0 else primitives.PUSH
     key, k_act = jax.random.split(key)
     states, info = step(states, aimed_actions(env, states, k_act, primitive))
-    states = heal(states)
     if primitive == primitives.GRASP:
       attempts += b
       successes += int(info.grasp_success.sum())
@@ -77,8 +75,7 @@ def main(argv=None) -> int:
                f' picked {np.asarray(info.picked)} lost {np.asarray(info.lost)}'
                f' healthy {np.asarray(info.healthy).astype(int)}')
   print(f'grasp success {successes}/{attempts}; objects picked {int(states.picked.sum())}, lost '
-        f'{int(states.lost.sum())}, health resets {int(states.health_resets.sum())}; '
-        f'total {time.perf_counter() - t0:.1f} s')
+        f'{int(states.lost.sum())}; total {time.perf_counter() - t0:.1f} s')
   return 0
 
 

@@ -7,6 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from envs import reserve as reserve_lib
 from envs.primitives import GRASP, PUSH
 from envs.tabletop import Tabletop
 from mvcoba_jax.config import resolve
@@ -95,17 +96,25 @@ def test_push_moves_cube_about_10cm_along_direction(env, outcome):
 
 
 def test_unhealthy_env_is_detected_reset_and_counted(env, compiled, outcome):
+  """Training's path: a step flags the environment, the reserve swaps in a fresh one, counted."""
   _, step = compiled
-  start, idx = outcome['start'], outcome['index']
+  start = outcome['start']
+  b = start.in_play.shape[0]
   bad = start.replace(data=start.data.replace(
       qvel=start.data.qvel.at[0, 7].set(jnp.nan)))
-  rows = [(GRASP, 0, 0.1, 0.1, 0.0)] * start.in_play.shape[0]
+  rows = [(GRASP, 0, 0.1, 0.1, 0.0)] * b
   after, info = step(bad, actions(rows))
   healthy = np.asarray(info.healthy)
   assert not healthy[0] and healthy[1:].all()
-  healed = jax.jit(env.heal)(after)
-  assert np.asarray(healed.healthy).all()
-  assert np.asarray(healed.health_resets).tolist() == [1] + [0] * (len(healthy) - 1)
+  # The reserve: the outcome's own start states (settled drops) stand in for fresh ones.
+  spare = reserve_lib.Reserve(states=jax.tree.map(lambda x: jnp.concatenate([x, x]), start),
+                              available=jnp.int32(2 * b))
+  swap = jax.jit(lambda s, r, m: reserve_lib.swap_in(jax.vmap(env.reset), r, s, m,
+                                                     jax.random.PRNGKey(0)))
+  healed, spare = swap(after, spare, ~info.healthy)
+  assert np.asarray(healed.healthy).all() and int(spare.available) == 2 * b - 1
+  assert np.asarray(healed.health_resets).tolist() == [1] + [0] * (b - 1)
   assert np.isfinite(np.asarray(healed.data.qpos[0])).all()
-  assert int(healed.in_play[0].sum()) == env.config.env.num_objects
+  np.testing.assert_array_equal(np.asarray(healed.data.qpos[0]),
+                                np.asarray(start.data.qpos[b - 1]))  # the reserve's top
   np.testing.assert_array_equal(np.asarray(healed.data.qpos[1:]), np.asarray(after.data.qpos[1:]))
