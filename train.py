@@ -2,6 +2,7 @@
 
   python train.py [--config configs/default.py] [--method mvcoba|mvcoba_2fcn|vpg|grasp_only]
                   [--set key=value ...] [--seed N] [--workdir runs/NAME] [--resume]
+                  [--distributed [--coordinator HOST:PORT --num-processes N --process-id I]]
 
 The work directory gets config.json (the resolved config), actions.jsonl (one line per action),
 metrics.jsonl (one line per host iteration), checkpoints/ (Orbax, atomic, resumable) and
@@ -48,7 +49,8 @@ def parse(argv):
   parser.add_argument('--eval-actions', type=int, default=40,
                       help='greedy actions (over all environments) in the closing evaluation')
   args = parser.parse_args(argv)
-  if not args.distributed and (args.coordinator or args.num_processes or args.process_id):
+  cluster = (args.coordinator, args.num_processes, args.process_id)
+  if not args.distributed and any(v is not None for v in cluster):
     parser.error('--coordinator, --num-processes and --process-id need --distributed')
   overrides = list(args.overrides)
   if args.method:
