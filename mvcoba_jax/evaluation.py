@@ -83,12 +83,18 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
   runs = Runs(actions=zeros, grasp_attempts=zeros, grasp_successes=zeros, picked=zeros,
               lost=zeros, objects=jnp.sum(states.in_play, axis=1, dtype=jnp.int32),
               failures=zeros, finished=jnp.zeros(n, bool), completed=jnp.zeros(n, bool))
+
+  def snapshot(obs, action: agent.PixelAction, grasp_success, active) -> Trace:
+    """One step of every run (N, ...), as the trace keeps it."""
+    return Trace(color=perception.color_to_uint8(obs.color), primitive=action.primitive,
+                 rotation=action.rotation, row=action.row, col=action.col,
+                 grasp_success=grasp_success, active=active)
+
   if record:
-    steps = lambda dtype: jnp.zeros((n, max_actions), dtype)
-    runs = runs.replace(trace=Trace(
-        color=jnp.zeros((n, max_actions) + obs.color.shape[1:], jnp.uint8),
-        primitive=steps(jnp.int32), rotation=steps(jnp.int32), row=steps(jnp.int32),
-        col=steps(jnp.int32), grasp_success=steps(bool), active=steps(bool)))
+    step = snapshot(obs, agent.PixelAction(zeros, zeros, zeros, zeros), runs.finished,
+                    runs.finished)
+    runs = runs.replace(trace=jax.tree.map(
+        lambda x: jnp.zeros((n, max_actions) + x.shape[1:], x.dtype), step))
   carry = (states, obs, jnp.ones(n, bool), runs, k_loop, jnp.int32(0))
 
   def body(carry):
@@ -114,14 +120,8 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
         finished=runs.finished | cleared | (failures > max_failures) | ~info.healthy,
         completed=runs.completed | (active & cleared & (picked == runs.objects)))
     if record:
-      color = jnp.round(jnp.clip(obs.color, 0.0, 1.0) * 255).astype(jnp.uint8)
-      at = lambda buf, x: buf.at[:, t].set(x)
-      trace = runs.trace
-      runs = runs.replace(trace=trace.replace(
-          color=at(trace.color, color), primitive=at(trace.primitive, action.primitive),
-          rotation=at(trace.rotation, action.rotation), row=at(trace.row, action.row),
-          col=at(trace.col, action.col), grasp_success=at(trace.grasp_success, info.grasp_success),
-          active=at(trace.active, active)))
+      runs = runs.replace(trace=jax.tree.map(lambda buf, x: buf.at[:, t].set(x), runs.trace,
+                                             snapshot(obs, action, info.grasp_success, active)))
     return (where_envs(active, next_states, states), where_envs(active, next_obs, obs),
             jnp.where(active, now_changed, changed), runs, keys, t + 1)
 

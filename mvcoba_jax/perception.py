@@ -26,6 +26,11 @@ class Observation:
   seen: jnp.ndarray  # (V, R, R) bool: the view has a point in the cell (else depth is 0)
 
 
+def color_to_uint8(color):
+  """Colour in 0..1 as uint8 0..255, rounded: the compact form the replay and run traces keep."""
+  return jnp.round(jnp.clip(jnp.asarray(color), 0.0, 1.0) * 255).astype(jnp.uint8)
+
+
 def grid_size(config: Config) -> int:
   """Heightmap side in cells; the resolution must tile the workspace exactly."""
   side = 2 * config.scene.workspace_half / config.perception.heightmap_resolution

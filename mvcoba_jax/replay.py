@@ -18,7 +18,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from mvcoba_jax.perception import Observation
+from mvcoba_jax.perception import Observation, color_to_uint8
 
 PRIORITY_EPSILON = 1e-3  # added to |TD error| so no transition starves
 
@@ -42,8 +42,7 @@ _SCALARS = dict(primitive=jnp.int32, rotation=jnp.int32, row=jnp.int32, col=jnp.
 
 
 def _pack(obs: Observation) -> Observation:
-  color = jnp.round(jnp.clip(jnp.asarray(obs.color), 0.0, 1.0) * 255).astype(jnp.uint8)
-  return Observation(color=color, depth=jnp.asarray(obs.depth, jnp.float16),
+  return Observation(color=color_to_uint8(obs.color), depth=jnp.asarray(obs.depth, jnp.float16),
                      seen=jnp.asarray(obs.seen, jnp.bool_))
 
 

@@ -16,6 +16,7 @@ import jax
 import numpy as np
 
 from envs import cameras
+from envs.primitives import GRASP
 from envs.scenarios import ScenarioError, case_to_layout, read_case
 from envs.scene import MAX_OPENING
 from envs.tabletop import Tabletop
@@ -69,7 +70,8 @@ def run_strip(trace, run: int, config: config_lib.Config, scale: int = 3) -> np.
                         interpolation=cv2.INTER_NEAREST) for v in np.asarray(trace.color[run, t])]
     yaw = float(rotation_angle(int(trace.rotation[run, t]), config.env.num_rotations))
     centre = np.array([trace.col[run, t] + 0.5, trace.row[run, t] + 0.5]) * scale
-    if int(trace.primitive[run, t]) == 1:  # grasp: the fingers close along (-sin, cos)
+    is_grasp = int(trace.primitive[run, t]) == GRASP
+    if is_grasp:  # the fingers close along (-sin, cos)
       half = finger_span / 2 * np.array([-np.sin(yaw), np.cos(yaw)])
       ends = (centre - half, centre + half)
       color = GRASP_OK_COLOR if bool(trace.grasp_success[run, t]) else GRASP_FAILED_COLOR
@@ -79,7 +81,7 @@ def run_strip(trace, run: int, config: config_lib.Config, scale: int = 3) -> np.
     a, b = (tuple(int(round(v)) for v in e) for e in ends)
     for view in views:
       cv2.circle(view, tuple(int(round(v)) for v in centre), scale + 1, color, -1)
-      (cv2.arrowedLine if color == PUSH_COLOR else cv2.line)(view, a, b, color, 2)
+      (cv2.line if is_grasp else cv2.arrowedLine)(view, a, b, color, 2)
     frames.append(np.concatenate(views, axis=0))
     frames.append(np.full((frames[-1].shape[0], 4, 3), 255, np.uint8))  # separator
   return np.concatenate(frames[:-1], axis=1) if frames else np.zeros((1, 1, 3), np.uint8)
