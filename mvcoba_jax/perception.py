@@ -54,7 +54,8 @@ def heightmap(image: cameras.CameraImage, colors, config: Config):
   key = jnp.where(valid, height * GEOM_SLOTS + image.geom, -1).reshape(-1)
   best = jnp.full(side * side + 1, -1, jnp.int32).at[cell].max(key)[:-1].reshape(side, side)
   seen = best >= 0
-  depth = jnp.where(seen, (best // GEOM_SLOTS) * HEIGHT_UNIT, 0.0)
+  # float32, not weakly typed: a restored checkpoint (always strong) must fit the same program.
+  depth = jnp.where(seen, (best // GEOM_SLOTS) * jnp.float32(HEIGHT_UNIT), jnp.float32(0.0))
   color = jnp.where(seen[..., None], colors[jnp.maximum(best % GEOM_SLOTS, 0)], 0.0)
   return color, depth, seen
 
