@@ -24,6 +24,7 @@ import time
 import jax
 import numpy as np
 from flax import nnx
+from tqdm import tqdm
 
 from envs.scenarios import ScenarioError, case_to_layout, read_case, stack_layouts
 from envs.tabletop import Tabletop
@@ -161,9 +162,14 @@ def main(argv=None) -> int:
       print(f'{suite}: {method}, {len(cases)} cases x {args.runs} runs, up to '
             f'{args.max_actions} actions each; compiling and running...', flush=True)
       start = time.perf_counter()
-      runs = jax.jit(lambda l, k: evaluation.evaluate(env, policy, views, l, k, args.max_actions,
-                                                      record=args.save_visuals))(layouts, keys)
-      logs = evaluation.run_logs(runs)
+      with tqdm(total=args.max_actions, unit='action', desc=f'  {suite}') as bar:
+        def progress(done, finished, bar=bar, n=len(layouts.in_play)):
+          bar.update(int(done) - bar.n)
+          bar.set_postfix_str(f'{int(finished)}/{n} runs finished')
+        runs = jax.jit(lambda l, k: evaluation.evaluate(
+            env, policy, views, l, k, args.max_actions, record=args.save_visuals,
+            progress=progress))(layouts, keys)
+        logs = evaluation.run_logs(runs)
       if args.save_visuals:
         folder = out / 'visuals' / pathlib.Path(suite).name / method.replace(':', '_')
         viz.write_run_strips(jax.device_get(runs.trace),

@@ -79,7 +79,7 @@ def failed(primitive, grasp_success, changed):
 
 
 def target_value(q_next, changed, done, rew, method: str, train: TrainConfig):
-  """y = r + gamma * max Q_target(s', a') over the primitive the rule picks at s' (0 at episode end)."""
+  """y = r + gamma * max Q_target(s', a') over the primitive the rule picks at s' (0 where done)."""
   b = q_next.shape[0]
   best = q_next.reshape(b, 2, -1).max(axis=-1)
   primitive = rule_primitive(method, changed, best)

@@ -67,11 +67,14 @@ def jitter(layout: Layout, key) -> Layout:
 
 
 def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Layout, keys,
-             max_actions: int, max_failures: int = 5, record: bool = False) -> Runs:
+             max_actions: int, max_failures: int = 5, record: bool = False,
+             progress: Callable[[jnp.ndarray, jnp.ndarray], None] | None = None) -> Runs:
   """Runs the greedy `policy` from each layout (N,) with its key (N,); returns the counters.
 
   With `record`, `Runs.trace` holds every step's heightmaps and action (memory grows with
-  N x max_actions x views x R^2 x 3 bytes).
+  N x max_actions x views x R^2 x 3 bytes). `progress(actions_done, runs_finished)` is called
+  on the host after every lockstep action, from inside the compiled loop: one call of a large
+  suite can take an hour on a CPU.
   """
   config = env.config
   observe = jax.vmap(lambda s: perception.observe(env, s))
@@ -122,6 +125,8 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
     if record:
       runs = runs.replace(trace=jax.tree.map(lambda buf, x: buf.at[:, t].set(x), runs.trace,
                                              snapshot(obs, action, info.grasp_success, active)))
+    if progress is not None:
+      jax.debug.callback(progress, t + 1, jnp.sum(runs.finished))
     return (where_envs(active, next_states, states), where_envs(active, next_obs, obs),
             jnp.where(active, now_changed, changed), runs, keys, t + 1)
 

@@ -33,8 +33,8 @@ class Transition:
   col: jnp.ndarray  # int32
   reward: jnp.ndarray  # float32
   next_obs: Observation
-  done: jnp.ndarray  # bool: no bootstrap from s_{t+1}
-  changed: jnp.ndarray  # bool: change observed after the action (MV-COBA's target primitive)
+  done: jnp.ndarray  # bool: no bootstrap from s_{t+1} (bad physics; episodes' ends bootstrap)
+  changed: jnp.ndarray  # bool: the action rule's change flag at s_{t+1} (MV-COBA's target primitive)
 
 
 _SCALARS = dict(primitive=jnp.int32, rotation=jnp.int32, row=jnp.int32, col=jnp.int32,

@@ -184,21 +184,26 @@ class Trainer:
                          state.failures + 1, 0)
     cleared = ~jnp.any(env_states.in_play, axis=1)
     done = cleared | (failures > t.max_consecutive_failures) | ~healthy
+    env_states, reserve = reserve_lib.swap_in(self.per_env(jax.vmap(self.env.reset)),
+                                              state.reserve, env_states, done, k_reset)
+    obs = jax.lax.cond(jnp.any(done), lambda: where_envs(done, self.observe(env_states), obs),
+                       lambda: obs)
 
+    # The task goes on past an episode's end (SPEC 6's target has no terminal state; VPG does
+    # the same): the action that ended an episode bootstraps from the fresh tabletop the robot
+    # sees next. A zero future there made clearing the last object worth less than a failed
+    # grasp that nudged it (0.5 + gamma * Q > 1), and the learned policy avoided clearing.
+    # Only bad physics does not bootstrap: its next state is not a state of the task.
     transition = replay_lib.Transition(
         obs=state.obs, primitive=action.primitive, rotation=action.rotation, row=action.row,
-        col=action.col, reward=rew, next_obs=where_envs(healthy, obs, state.obs), done=done,
-        changed=changed)
+        col=action.col, reward=rew, next_obs=where_envs(healthy, obs, state.obs), done=~healthy,
+        changed=changed | done)
     replay = jax.lax.cond(learn, lambda r: replay_lib.add(r, transition), lambda r: r,
                           state.replay)
     state = state.replace(replay=replay)
     state, loss = jax.lax.cond(learn & (replay.size > 0), self.update,
                                lambda s, k: (s, jnp.float32(0.0)), state, k_learn)
 
-    env_states, reserve = reserve_lib.swap_in(self.per_env(jax.vmap(self.env.reset)),
-                                              state.reserve, env_states, done, k_reset)
-    obs = jax.lax.cond(jnp.any(done), lambda: where_envs(done, self.observe(env_states), obs),
-                       lambda: obs)
     b = done.shape[0]
     state = state.replace(
         env=env_states, reserve=reserve, obs=obs, changed=changed | done,

@@ -78,12 +78,13 @@ def test_malformed_case_fails_with_file_and_line_before_compiling(tmp_path, caps
   assert 'bad.scn:2' in err and "'x'" in err
 
 
-def test_eval_cli_writes_tables_and_visuals(setup, tmp_path):
+def test_eval_cli_writes_tables_and_visuals(setup, tmp_path, capsys):
   folder = setup[0]
   code = eval_cli.main(['--baseline', 'heuristic', '--suite', str(folder), '--config',
                         'configs/tiny.py', '--runs', '1', '--max-actions', str(MAX_ACTIONS),
                         '--out', str(tmp_path / 'out'), '--save-visuals'])
   assert code == 0
+  assert '/2 runs finished' in capsys.readouterr().err  # progress from inside the jitted loop
   text = (tmp_path / 'out' / 'results.md').read_text()
   assert 'grasp success' in text and 'pair' in text and 'baseline:heuristic' in text
   report = json.loads((tmp_path / 'out' / 'results.json').read_text())

@@ -21,10 +21,14 @@ def trainer():
 
 
 @pytest.fixture(scope='module')
-def trained(trainer):
+def iterate(trainer):
+  return jax.jit(trainer.iterate)
+
+
+@pytest.fixture(scope='module')
+def trained(trainer, iterate):
   """The state after two host iterations of real training (8 actions)."""
   state = jax.jit(trainer.init)(jax.random.PRNGKey(0))
-  iterate = jax.jit(trainer.iterate)
   logs = []
   for _ in range(2):
     state, log = iterate(state, jnp.bool_(True), jnp.float32(-1.0))
@@ -41,6 +45,22 @@ def test_training_steps_fill_the_replay_and_update(trainer, trained):
   assert int(state.skipped_updates) == 0
   assert all(np.isfinite(np.asarray(log.loss)).all() for log in logs)
   assert np.asarray(state.env.healthy).all()
+
+
+def test_episode_end_bootstraps_from_the_fresh_tabletop(trainer, trained, iterate):
+  """The action that ends an episode is stored with the next tabletop as s_{t+1}, not as
+  terminal: the task goes on, so clearing the table is worth as much as any other success."""
+  state, _ = trained
+  empty = state.replace(env=state.env.replace(in_play=state.env.in_play.at[0].set(False)))
+  after, log = iterate(empty, jnp.bool_(True), jnp.float32(-1.0))
+  b = trainer.config.num_envs
+  first, second = int(state.replay.cursor), int(state.replay.cursor) + b  # env 0, steps 1 and 2
+  data = after.replay.data
+  assert bool(log.done[0, 0]) and not bool(log.done[1, 0])  # env 0 had nothing left: cleared
+  assert not bool(data.done[first]) and bool(data.changed[first])  # grasp rule at the new tabletop
+  np.testing.assert_array_equal(np.asarray(data.next_obs.depth[first]),
+                                np.asarray(data.obs.depth[second]))
+  assert float(np.max(np.asarray(data.next_obs.depth[first], np.float32))) > 0.02  # objects again
 
 
 def test_loss_falls_on_a_fixed_replay_batch(trainer, trained):
