@@ -1,6 +1,6 @@
 """Evaluates trained policies (or a baseline) on test suites and prints the paper's tables.
 
-  python eval.py --checkpoint runs/train [runs/vpg ...] [--suite random|ordered|occluded|vpg|all|PATH ...]
+  python eval.py --checkpoint runs/train [runs/vpg ...] [--suite random|ordered|occluded|isolated|vpg|all|PATH ...]
                  [--runs 5] [--max-actions 60] [--out eval_out] [--save-visuals]
   python eval.py --baseline heuristic --suite ordered        # no checkpoint needed
   python eval.py --compare runs/mvcoba runs/vpg ...          # same as several --checkpoint
@@ -33,7 +33,7 @@ from mvcoba_jax import evaluation, metrics, networks, viz
 from mvcoba_jax.export import ExportError, load
 from mvcoba_jax.runtime import REPO_ROOT, enable_compilation_cache
 
-SUITES = ('random', 'ordered', 'occluded', 'vpg')
+SUITES = ('random', 'ordered', 'occluded', 'isolated', 'vpg')
 METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action efficiency (%)'),
            ('completion', 'completion (%)'), ('grasp_to_push', 'grasp-to-push ratio'))
 
