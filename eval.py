@@ -164,8 +164,8 @@ def main(argv=None) -> int:
       start = time.perf_counter()
       with tqdm(total=args.max_actions, unit='action', desc=f'  {suite}') as bar:
         def progress(done, finished, bar=bar, n=len(layouts.in_play)):
+          bar.set_postfix_str(f'{int(finished)}/{n} runs finished', refresh=False)
           bar.update(int(done) - bar.n)
-          bar.set_postfix_str(f'{int(finished)}/{n} runs finished')
         runs = jax.jit(lambda l, k: evaluation.evaluate(
             env, policy, views, l, k, args.max_actions, record=args.save_visuals,
             progress=progress))(layouts, keys)
