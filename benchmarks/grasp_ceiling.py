@@ -25,28 +25,13 @@ import numpy as np  # noqa: E402
 
 from envs import shapes  # noqa: E402
 from envs.primitives import GRASP, Action  # noqa: E402
-from envs.scene import park_position  # noqa: E402
-from envs.tabletop import Layout, Tabletop  # noqa: E402
+from envs.scenarios import Case, CaseObject, case_to_layout, rest_height, rest_quat  # noqa: E402
+from envs.scenarios import stack_layouts  # noqa: E402
+from envs.tabletop import Tabletop  # noqa: E402
 from mvcoba_jax.config import resolve  # noqa: E402
-from mvcoba_jax.geometry import quat_mul, yaw_quat  # noqa: E402
 from mvcoba_jax.runtime import enable_compilation_cache  # noqa: E402
 
 CENTRE = (0.02, -0.03)
-
-
-def isolated(env: Tabletop, slot: int, yaw: float) -> Layout:
-  """Layout with only `slot` in play, resting at CENTRE with the given yaw."""
-  m = env.num_slots
-  shape = shapes.SHAPES[env.scene.index.slot_shapes[slot]]
-  pos = np.array([park_position(i) for i in range(m)], np.float32)
-  quat = np.tile(np.array([1, 0, 0, 0], np.float32), (m, 1))
-  pos[slot] = (*CENTRE, 0.5 * shape.rest_extent[2] + 0.001)
-  quat[slot] = np.asarray(quat_mul(yaw_quat(jnp.float32(yaw)), jnp.asarray(shape.rest_quat,
-                                                                            jnp.float32)))
-  occ_pos, occ_quat = env.parked_occluders()
-  return Layout(in_play=jnp.asarray(np.arange(m) == slot), pos=jnp.asarray(pos),
-                quat=jnp.asarray(quat), color=jnp.full((m, 3), 0.5),
-                occluder_pos=occ_pos, occluder_quat=occ_quat)
 
 
 def main():
@@ -55,16 +40,16 @@ def main():
   args = parser.parse_args()
   enable_compilation_cache()
   env = Tabletop(resolve(None))
-  names = env.scene.index.slot_shapes
-  slots = {name: names.index(name) for name in dict.fromkeys(names)}
+  names = list(dict.fromkeys(env.scene.index.slot_shapes))  # each shape of the pool once
   rotations = env.config.env.num_rotations
   layouts, rows = [], []
-  for name, slot in slots.items():
+  for name in names:
+    alone = CaseObject(name, (0.5, 0.5, 0.5), (*CENTRE, rest_height(name)),
+                       rest_quat(name, np.deg2rad(args.yaw_deg)), line=0)
+    layouts += [case_to_layout(Case(name, 'grasp_ceiling', (alone,)), env)] * rotations
     top = float(shapes.SHAPES[name].rest_extent[2])
-    for k in range(rotations):
-      layouts.append(isolated(env, slot, np.deg2rad(args.yaw_deg)))
-      rows.append((k, *CENTRE, top))
-  batch = jax.tree.map(lambda *x: jnp.stack(x), *layouts)
+    rows += [(k, *CENTRE, top) for k in range(rotations)]
+  batch = stack_layouts(layouts)
   k, x, y, z = (np.array(c) for c in zip(*rows))
   actions = Action(primitive=jnp.full(len(rows), GRASP, jnp.int32),
                    rotation=jnp.asarray(k, jnp.int32), x=jnp.asarray(x, jnp.float32),
@@ -72,11 +57,11 @@ def main():
   t0 = time.perf_counter()
   start = jax.jit(jax.vmap(env.reset_from_case))(batch)
   _, info = jax.jit(jax.vmap(env.step))(start, actions)
-  success = np.asarray(info.grasp_success).reshape(len(slots), rotations)
+  success = np.asarray(info.grasp_success).reshape(len(names), rotations)
   seconds = time.perf_counter() - t0
   per_shape = {name: dict(lifted_at_rotations=np.flatnonzero(success[i]).tolist(),
                           fraction=float(success[i].mean()), any=bool(success[i].any()))
-               for i, name in enumerate(slots)}
+               for i, name in enumerate(names)}
   print(json.dumps(dict(
       settings=dict(yaw_deg=args.yaw_deg, centre=CENTRE, rotations=rotations,
                     batch=len(rows), backend=jax.default_backend(), machine=platform.machine(),

@@ -133,12 +133,13 @@ def _color_text(color) -> str:
   return '#' + ''.join(f'{round(255 * float(c)):02x}' for c in color)
 
 
-def _rest_height(shape: str) -> float:
+def rest_height(shape: str) -> float:
   """Centre height of `shape` dropped on the table in its rest orientation."""
   return 0.5 * float(shapes.SHAPES[shape].rest_extent[2]) + DROP_GAP
 
 
-def _rest_quat(shape: str, yaw: float) -> tuple[float, ...]:
+def rest_quat(shape: str, yaw: float) -> tuple[float, ...]:
+  """Orientation (w, x, y, z) of `shape` resting on the table, turned by `yaw` (rad)."""
   quat = quat_mul(yaw_quat(jnp.float32(yaw)), jnp.asarray(shapes.SHAPES[shape].rest_quat))
   return tuple(float(q) for q in np.asarray(quat))
 
@@ -177,13 +178,13 @@ def _read_scn(path, text: str, workspace_half: float):
       if abs(v) > workspace_half:
         raise _error(path, n, name, f'{v:g} lies outside the workspace '
                      f'(|{name}| <= {workspace_half:g})')
-    z = _rest_height(shape)
+    z = rest_height(shape)
     if len(fields) == 6:
       z = _number(path, n, 'z', fields[5])
       lowest = 0.5 * float(shapes.SHAPES[shape].rest_extent[2])
       if z < lowest:
         raise _error(path, n, 'z', f'{z:g} puts the {shape} into the table (lowest {lowest:g})')
-    objects.append(CaseObject(shape, color, (x, y, z), _rest_quat(shape, math.radians(yaw)), n))
+    objects.append(CaseObject(shape, color, (x, y, z), rest_quat(shape, math.radians(yaw)), n))
   return objects, occluders
 
 
@@ -200,7 +201,7 @@ def write_scenario(case: Case, path) -> None:
     yaw = (yaw + 180.0) % 360.0 - 180.0
     x, y, z = obj.pos
     fields = [obj.shape, _color_text(obj.color), f'{x:.5f}', f'{y:.5f}', f'{yaw:.3f}']
-    if z > _rest_height(obj.shape) + WRITE_Z_ABOVE:
+    if z > rest_height(obj.shape) + WRITE_Z_ABOVE:
       fields.append(f'{z:.5f}')
     lines.append(' '.join(fields))
   for occ in case.occluders:
