@@ -77,7 +77,7 @@ def action_records(log, first_action: int) -> list[dict]:
            'grasp_success': bool(log.grasp_success[i, e]), 'changed': bool(log.changed[i, e]),
            'reward': float(log.reward[i, e]), 'done': bool(log.done[i, e]),
            'healthy': bool(log.healthy[i, e]), 'picked': int(log.picked[i, e]),
-           'lost': int(log.lost[i, e])}
+           'lost': int(log.lost[i, e]), 'explored': bool(log.explored[i, e])}
           for i in range(k) for e in range(b)]
 
 

@@ -52,8 +52,7 @@ def bench(config, batch: int, repeats: int) -> dict:
 
   q = jax.jit(trainer.q_maps)
   _, _, forward = timed(q, state.params, state.obs, repeats=repeats)
-  action = agent.choose_actions(q(state.params, state.obs), state.changed, 0.0,
-                                jax.random.PRNGKey(1), trainer.method)
+  action = agent.greedy_actions(q(state.params, state.obs), state.changed, trainer.method)
   world = agent.to_world(action, state.obs.depth, trainer.views, config)
   _, _, physics = timed(jax.jit(jax.vmap(trainer.env.step)), state.env, world, repeats=repeats)
   _, _, rendering = timed(jax.jit(trainer.observe), state.env, repeats=repeats)

@@ -115,6 +115,7 @@ class TrainConfig:
   epsilon_start: float = 0.5
   epsilon_end: float = 0.1
   epsilon_decay_actions: int = 800  # linear decay over this many actions (~25 min on 2 CPU cores)
+  explore_min_height: float = 0.01  # random actions go to heightmap cells above this (m)
   replay_capacity: int = 1024  # transitions kept on the device
   batch_size: int = 8  # transitions per SGD update, one update per lockstep action
   priority_exponent: float = 0.6  # sampling weight |TD error|^alpha (0: uniform)

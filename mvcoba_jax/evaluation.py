@@ -147,7 +147,7 @@ def run_logs(runs: Runs) -> list[RunLog]:
 def greedy_policy(q_maps: Callable, method: str) -> Policy:
   """A trained network's greedy policy: `q_maps(obs)` -> (N, 2, K, R, R)."""
   def policy(obs, changed, keys):
-    return agent.choose_actions(q_maps(obs), changed, 0.0, keys[0], method)  # greedy: no draws
+    return agent.greedy_actions(q_maps(obs), changed, method)
   return policy
 
 

@@ -51,6 +51,7 @@ class StepLog:
   lost: jnp.ndarray
   loss: jnp.ndarray  # scalar: the update's loss (0 when no update ran)
   epsilon: jnp.ndarray  # scalar
+  explored: jnp.ndarray  # a random action, not the policy's
 
 
 def _all_finite(tree):
@@ -172,7 +173,8 @@ class Trainer:
     key, k_act, k_learn, k_reset = jax.random.split(state.key, 4)
     eps = jnp.where(epsilon >= 0, epsilon, agent.epsilon_at(state.actions, t))
     q = self.q_maps(state.params, state.obs)
-    action = agent.choose_actions(q, state.changed, eps, k_act, self.method)
+    occupied = jnp.max(state.obs.depth[:, jnp.asarray(self.views)], axis=1) > t.explore_min_height
+    action, explored = agent.epsilon_greedy(q, state.changed, occupied, eps, k_act, self.method)
     env_states, info = self.per_env(jax.vmap(self.env.step))(
         state.env, agent.to_world(action, state.obs.depth, self.views, cfg))
     obs = self.observe(env_states)
@@ -211,7 +213,7 @@ class Trainer:
         episodes=state.episodes + jnp.sum(done, dtype=jnp.int32))
     log = StepLog(primitive=action.primitive, grasp_success=info.grasp_success, changed=changed,
                   reward=rew, done=done, healthy=healthy, picked=info.picked, lost=info.lost,
-                  loss=loss, epsilon=eps)
+                  loss=loss, epsilon=eps, explored=explored)
     return state, log
 
   def iterate(self, state: TrainState, learn, epsilon) -> tuple[TrainState, StepLog]:

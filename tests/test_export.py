@@ -98,8 +98,7 @@ def parity(run, exported, states):
 
 def jax_action(q, changed, depth, trainer):
   """Greedy action and world point the way the training step picks and executes them."""
-  action = agent.choose_actions(jnp.asarray(q), jnp.array([changed]), 0.0,
-                                jax.random.PRNGKey(0), trainer.method)
+  action = agent.greedy_actions(jnp.asarray(q), jnp.array([changed]), trainer.method)
   world = agent.to_world(action, depth, trainer.views, trainer.config)
   return {**{k: int(getattr(action, k)[0]) for k in ('primitive', 'rotation', 'row', 'col')},
           **{k: float(getattr(world, k)[0]) for k in ('x', 'y', 'z')}}
@@ -149,8 +148,7 @@ def test_example_rule_is_the_agents_rule(method):
   example = _example()
   model = {'primitives': {'push': 0, 'grasp': 1}, 'action_rule': export.action_rule(method)}
   for changed in (False, True):
-    action = agent.choose_actions(jnp.asarray(q), jnp.array([changed]), 0.0,
-                                  jax.random.PRNGKey(0), method)
+    action = agent.greedy_actions(jnp.asarray(q), jnp.array([changed]), method)
     got = example.choose(q[0], changed, model)
     assert [got[k] for k in ('primitive', 'rotation', 'row', 'col')] == [
         int(getattr(action, k)[0]) for k in ('primitive', 'rotation', 'row', 'col')]
