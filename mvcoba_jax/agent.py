@@ -54,8 +54,8 @@ def epsilon_greedy(q, changed, occupied, epsilon, key, method: str):
   A random action keeps the rule's primitive (max-Q methods draw the primitive too) and draws a
   rotation and a pixel where something stands (`occupied`, (B, R, R); anywhere on an empty
   table). Uniform pixels land on bare table most of the time in a 10-object scene: wasted
-  actions that teach only what the network learns in its first minutes, and that pulled the
-  training curve about 10 points under the greedy policy.
+  actions that teach only what the network learns in its first minutes. With them, a default
+  run's training window ended at 64% while its greedy policy grasped 81%.
   """
   b, _, k, r, _ = q.shape
   greedy = greedy_actions(q, changed, method)
