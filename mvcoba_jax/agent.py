@@ -74,12 +74,16 @@ def epsilon_greedy(q, changed, occupied, epsilon, key, method: str):
   return action, explore
 
 
+def surface_height(depth, views: tuple[int, ...]):
+  """(B, R, R) highest surface the method's views see in each heightmap cell of depth (B, V, R, R)."""
+  return jnp.max(depth[:, jnp.asarray(views)], axis=1)
+
+
 def to_world(action: PixelAction, depth, views: tuple[int, ...], config: Config) -> Action:
   """World-frame primitive at the pixel; z is the highest surface the method's views see there."""
   x, y = pixel_to_world(action.row, action.col, config.perception.heightmap_resolution,
                         config.scene.workspace_half)
-  b = jnp.arange(depth.shape[0])
-  z = jnp.max(depth[:, jnp.asarray(views)][b, :, action.row, action.col], axis=-1)
+  z = surface_height(depth, views)[jnp.arange(depth.shape[0]), action.row, action.col]
   return Action(primitive=action.primitive, rotation=action.rotation, x=x, y=y, z=z)
 
 

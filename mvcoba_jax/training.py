@@ -173,7 +173,7 @@ class Trainer:
     key, k_act, k_learn, k_reset = jax.random.split(state.key, 4)
     eps = jnp.where(epsilon >= 0, epsilon, agent.epsilon_at(state.actions, t))
     q = self.q_maps(state.params, state.obs)
-    occupied = jnp.max(state.obs.depth[:, jnp.asarray(self.views)], axis=1) > t.explore_min_height
+    occupied = agent.surface_height(state.obs.depth, self.views) > t.explore_min_height
     action, explored = agent.epsilon_greedy(q, state.changed, occupied, eps, k_act, self.method)
     env_states, info = self.per_env(jax.vmap(self.env.step))(
         state.env, agent.to_world(action, state.obs.depth, self.views, cfg))
