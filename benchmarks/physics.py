@@ -97,6 +97,20 @@ def native(env: Tabletop, states, actions: Action, batch: int) -> dict:
   return {'mj_step_loop_env_steps_per_s': loop, 'rollout_2_threads_env_steps_per_s': threaded}
 
 
+def settings() -> dict:
+  """The physics settings and software every physics benchmark reports."""
+  base = resolve(None)
+  return {
+      'timestep': base.scene.timestep, 'solver': 'Newton', 'jacobian': 'sparse',
+      'iterations': base.scene.iterations, 'ls_iterations': base.scene.ls_iterations,
+      'cone': 'pyramidal',
+      'native_note': 'native runs start from the same states and controls; parked objects '
+                     'are not pinned there (they fall far outside the workspace)',
+      'jax': jax.__version__, 'mujoco': mujoco.__version__, 'device': str(jax.devices()[0]),
+      'cpu_count': os.cpu_count(), 'machine': platform.machine(),
+  }
+
+
 def bench(n: int, batch: int, repeats: int) -> dict:
   env = make_env(n)
   keys = jax.random.split(jax.random.PRNGKey(0), batch)
@@ -138,7 +152,6 @@ def main():
     for b in args.batch:
       rows.append(bench(n, b, args.repeats))
       print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
-  base = resolve(None)
   for n in args.objects:
     one = [r for r in rows if r['objects'] == n and r['batch'] == min(args.batch)][0]
     for r in rows:
@@ -147,15 +160,9 @@ def main():
   print(json.dumps({
       'benchmark': 'physics',
       'settings': {
-          'timestep': base.scene.timestep, 'solver': 'Newton', 'jacobian': 'sparse',
-          'iterations': base.scene.iterations, 'ls_iterations': base.scene.ls_iterations,
-          'cone': 'pyramidal', 'contact_limits': CONTACT_LIMITS, 'pools': POOLS,
+          **settings(), 'contact_limits': CONTACT_LIMITS, 'pools': POOLS,
           'primitive': 'grasp at the first object in play, full script',
-          'native_note': 'native runs start from the same states and controls; parked objects '
-                         'are not pinned there (they fall far outside the workspace)',
           'persistent_compilation_cache': args.cache,
-          'jax': jax.__version__, 'mujoco': mujoco.__version__, 'device': str(jax.devices()[0]),
-          'cpu_count': os.cpu_count(), 'machine': platform.machine(),
       },
       'results': rows,
   }, indent=1))
