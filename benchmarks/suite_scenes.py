@@ -29,7 +29,8 @@ from physics import grasp_actions, native, settings, timed  # noqa: E402
 
 
 def bench(suite: str, repeats: int) -> dict:
-  cases = [read_case(f) for f in sorted((ROOT / 'suites' / suite).glob('*.scn'))]
+  files = evaluation_cli.suite_files([suite], ROOT.parent / 'shared' / 'vpg-test-cases')[suite]
+  cases = [read_case(f) for f in files]
   env = Tabletop(evaluation_cli.suite_config(resolve(None), evaluation_cli.pool_for(cases)))
   largest = max(cases, key=lambda c: len(c.objects))
   layouts = stack_layouts([case_to_layout(largest, env)])
@@ -55,7 +56,7 @@ def bench(suite: str, repeats: int) -> dict:
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--suite', nargs='+', default=['ordered', 'random'],
-                      choices=('random', 'ordered', 'occluded', 'isolated'))
+                      choices=evaluation_cli.SUITES)
   parser.add_argument('--repeats', type=int, default=1)
   args = parser.parse_args()
   rows = []
