@@ -1,4 +1,4 @@
-"""Physics cost of each evaluation suite's scene: why the random suite needs a GPU.
+"""Physics cost of each evaluation suite's scene, with MJX and with native MuJoCo.
 
 `eval.py` builds one scene per suite: the object-slot pool that holds every case, with contact
 limits that grow with it (`eval.suite_config`). This times one scripted grasp (B=1, the full

@@ -2,6 +2,7 @@
 import jax
 import numpy as np
 import pytest
+import threadpoolctl
 
 from envs.scenarios import case_to_layout, read_case, stack_layouts
 from envs.tabletop import Tabletop
@@ -53,3 +54,11 @@ def test_case_settles_in_place_without_interpenetration(settled, case_index):
   assert drift.max() < 0.01, f'{case.name}: drift per object {np.round(drift, 4)}'
   assert max_penetration(env, states.data.qpos[case_index]) < 0.002
   assert bool(states.healthy[case_index])
+
+
+def test_scipy_blas_is_serial_once_envs_is_imported():
+  """MJX factors nv x nv matrices with scipy's OpenBLAS; from nv = 256 (the random suite's scene)
+  its own threads fight XLA's and a physics step gets 14 times slower (envs/__init__.py)."""
+  blas = [lib for lib in threadpoolctl.threadpool_info() if lib['user_api'] == 'blas']
+  assert blas, 'no BLAS library found loaded'
+  assert all(lib['num_threads'] == 1 for lib in blas), blas
