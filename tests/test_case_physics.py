@@ -58,7 +58,7 @@ def test_case_settles_in_place_without_interpenetration(settled, case_index):
 
 def test_scipy_blas_is_serial_once_envs_is_imported():
   """MJX factors nv x nv matrices with scipy's OpenBLAS; from nv = 256 (the random suite's scene)
-  its own threads fight XLA's and a physics step gets 14 times slower (envs/__init__.py)."""
+  its own threads fight XLA's and a grasp there takes 23 times longer (envs/__init__.py)."""
   blas = [lib for lib in threadpoolctl.threadpool_info() if lib['user_api'] == 'blas']
   assert blas, 'no BLAS library found loaded'
   assert all(lib['num_threads'] == 1 for lib in blas), blas
