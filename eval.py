@@ -176,10 +176,12 @@ def main(argv=None) -> int:
                              [f'{n}_run{r}' for n in names for r in range(args.runs)], folder,
                              env.config)
         print(f'  visuals in {folder}', flush=True)
-      per_case = {name: metrics.case_metrics(logs[i * args.runs:(i + 1) * args.runs])
-                  for i, name in enumerate(names)}
+      by_case = {name: logs[i * args.runs:(i + 1) * args.runs] for i, name in enumerate(names)}
+      per_case = {name: metrics.case_metrics(case_logs) for name, case_logs in by_case.items()}
       rows[method] = {'cases': per_case, 'mean': metrics.suite_average(per_case),
-                      'wall_s': time.perf_counter() - start}
+                      'wall_s': time.perf_counter() - start,
+                      'runs': {name: [dataclasses.asdict(log) for log in case_logs]
+                               for name, case_logs in by_case.items()}}
       print(f'  done in {rows[method]["wall_s"]:.0f} s', flush=True)
     report[suite] = rows
     for key, label in METRICS:

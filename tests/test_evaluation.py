@@ -88,7 +88,11 @@ def test_eval_cli_writes_tables_and_visuals(setup, tmp_path, capsys):
   text = (tmp_path / 'out' / 'results.md').read_text()
   assert 'grasp success' in text and 'pair' in text and 'baseline:heuristic' in text
   report = json.loads((tmp_path / 'out' / 'results.json').read_text())
-  actions = report[str(folder)]['baseline:heuristic']['cases']['pair']['actions']
+  row = report[str(folder)]['baseline:heuristic']
+  actions = row['cases']['pair']['actions']
+  (run,) = row['runs']['pair']
+  assert run['actions'] == actions and run['objects'] == 2
+  assert run['picked'] + run['lost'] <= run['objects']
   strips = sorted((tmp_path / 'out' / 'visuals' / folder.name / 'baseline_heuristic').glob('*.png'))
   assert [p.name for p in strips] == ['pair_run0.png', 'three_run0.png']
   image = cv2.imread(str(strips[0]))
