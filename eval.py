@@ -33,6 +33,7 @@ from mvcoba_jax.export import ExportError, load
 from mvcoba_jax.runtime import REPO_ROOT, enable_compilation_cache
 
 SUITES = ('random', 'ordered', 'occluded', 'isolated', 'vpg')
+VPG_CASES = REPO_ROOT.parent / 'shared' / 'vpg-test-cases'  # the 'vpg' suite's default folder
 METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action efficiency (%)'),
            ('completion', 'completion (%)'), ('grasp_to_push', 'grasp-to-push ratio'))
 
@@ -126,7 +127,7 @@ def main(argv=None) -> int:
                       help=f'{", ".join(SUITES)}, all, or paths of case files/folders')
   parser.add_argument('--runs', type=int, default=5, help='runs per case')
   parser.add_argument('--max-actions', type=int, default=60, help='action cap per run')
-  parser.add_argument('--vpg-dir', default=str(REPO_ROOT.parent / 'shared' / 'vpg-test-cases'))
+  parser.add_argument('--vpg-dir', default=str(VPG_CASES))
   parser.add_argument('--out', default='eval_out', help='folder for JSON and Markdown tables')
   parser.add_argument('--seed', type=int, default=0)
   parser.add_argument('--save-visuals', action='store_true',

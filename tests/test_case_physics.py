@@ -1,11 +1,7 @@
 """Test cases settle where they are listed: the public VPG cases and one written here."""
-import pathlib
-
 import jax
 import numpy as np
 import pytest
-import scipy
-import threadpoolctl
 
 from envs.scenarios import case_to_layout, read_case, stack_layouts
 from envs.tabletop import Tabletop
@@ -57,14 +53,3 @@ def test_case_settles_in_place_without_interpenetration(settled, case_index):
   assert drift.max() < 0.01, f'{case.name}: drift per object {np.round(drift, 4)}'
   assert max_penetration(env, states.data.qpos[case_index]) < 0.002
   assert bool(states.healthy[case_index])
-
-
-def test_scipy_blas_is_serial_once_envs_is_imported():
-  """MJX factors nv x nv matrices with scipy's OpenBLAS; from nv = 256 (the random suite's scene)
-  its own threads fight XLA's and a grasp there takes 23 times longer (envs/__init__.py).
-  Other BLAS copies (OpenCV bundles one) play no part in the physics."""
-  scipy_libs = pathlib.Path(scipy.__file__).parent.parent / 'scipy.libs'
-  blas = [lib for lib in threadpoolctl.threadpool_info()
-          if pathlib.Path(lib['filepath']).parent == scipy_libs]
-  assert blas, f'scipy\'s BLAS not found loaded from {scipy_libs}'
-  assert all(lib['num_threads'] == 1 for lib in blas), blas
