@@ -11,8 +11,8 @@ runs when `envs` is imported.
   parallelises, so BLAS stays serial (threadpoolctl also works on a library already loaded).
 - jaxlib 0.10 splits a batched LAPACK call (a vmapped `cho_factor`) over XLA's intra-op thread
   pool and blocks a pool thread until the pieces finish. When as many such calls run at once as
-  the pool has threads (2 here: the mass matrix and the solver factor independently), every
-  thread waits for work only they could run, and the process hangs with the CPU idle. jaxlib
+  the pool has threads (2 here; XLA runs independent calls side by side), every thread waits for
+  work that only a waiting thread could run, and the process hangs with the CPU idle. jaxlib
   compiles this path out from 0.11.1, which is not published for this platform. A batched
   Cholesky or triangular solve is therefore lowered as a loop over its matrices, each one
   unbatched LAPACK call that runs on the calling thread. `python benchmarks/batched_lapack.py`
