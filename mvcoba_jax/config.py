@@ -35,6 +35,10 @@ class SceneConfig:
   timestep: float = 0.004
   iterations: int = 4
   ls_iterations: int = 6
+  # Contact stiffness (MuJoCo solref time constant, s). 2 x timestep, the stiffest MuJoCo allows:
+  # with its default 0.02 the fingers press packed blocks millimetres into the table and lift
+  # them with no push (benchmarks/ordered_graspability.py).
+  contact_timeconst: float = 0.008
   friction: float = 1.0
   finger_friction: float = 1.5
   object_density: float = 500.0
