@@ -1,0 +1,105 @@
+"""Does the ordered suite force a push? An oracle grasp at the centre of every object, no push.
+
+For each ordered case (in a scene holding just that case's objects), the case is reset once and
+every object is grasped at its centre and top surface at each of 8 rotations (the half turn:
+the fingers are symmetric), all in one batch of `jax.vmap(env.step)`. An object counts as
+liftable when some rotation picks it (it leaves the table held by the fingers). In a case that
+forces a push, the packed objects are not liftable; the case's isolated object is the control.
+
+  python benchmarks/ordered_graspability.py [--set scene.contact_timeconst=0.02] [--cases 00 02]
+"""
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import pathlib
+import platform
+import sys
+import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
+
+import jax  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+import numpy as np  # noqa: E402
+
+import eval as evaluate  # noqa: E402
+from envs import shapes  # noqa: E402
+from envs.primitives import GRASP, Action  # noqa: E402
+from envs.scenarios import case_to_layout, read_case  # noqa: E402
+from envs.tabletop import Tabletop  # noqa: E402
+from mvcoba_jax import config as config_lib  # noqa: E402
+from mvcoba_jax.runtime import enable_compilation_cache  # noqa: E402
+
+SUITE = pathlib.Path(__file__).resolve().parent.parent / 'suites' / 'ordered'
+PACKED = 0.06  # an object with a neighbour centre this close is packed; others are isolated
+
+
+def slots_of(case, env) -> list[int]:
+  """The slot each case object takes (case_to_layout's rule: next free slot of its shape)."""
+  free = collections.defaultdict(list)
+  for i, shape in enumerate(env.scene.index.slot_shapes):
+    free[shape].append(i)
+  return [free[o.shape].pop(0) for o in case.objects]
+
+
+def run_case(path: pathlib.Path, base, rotations: int) -> dict:
+  case = read_case(path)
+  env = Tabletop(evaluate.suite_config(base, evaluate.pool_for([case])))
+  n = len(case.objects)
+  start = jax.jit(env.reset_from_case)(case_to_layout(case, env))
+  batch = jax.tree.map(lambda a: jnp.broadcast_to(a, (n * rotations, *a.shape)), start)
+  xy = np.array([o.pos[:2] for o in case.objects])
+  top = np.array([float(shapes.SHAPES[o.shape].rest_extent[2]) for o in case.objects])
+  obj = np.repeat(np.arange(n), rotations)
+  actions = Action(primitive=jnp.full(n * rotations, GRASP, jnp.int32),
+                   rotation=jnp.asarray(np.tile(np.arange(rotations), n), jnp.int32),
+                   x=jnp.asarray(xy[obj, 0], jnp.float32), y=jnp.asarray(xy[obj, 1], jnp.float32),
+                   z=jnp.asarray(top[obj], jnp.float32))
+  after, info = jax.jit(jax.vmap(env.step))(batch, actions)
+  slots = np.array(slots_of(case, env))[obj]
+  gone = ~np.asarray(after.in_play)[np.arange(n * rotations), slots]
+  # The target itself was picked (not a neighbour, not knocked off the table).
+  lifted = (gone & (np.asarray(info.picked) > 0) & (np.asarray(info.lost) == 0)).reshape(n, -1)
+  gap = np.linalg.norm(xy[:, None] - xy[None], axis=-1) + np.eye(n) * 1e9
+  packed = gap.min(axis=1) < PACKED
+  objects = [dict(shape=o.shape, line=o.line, packed=bool(p), lifted_at=np.flatnonzero(r).tolist())
+             for o, p, r in zip(case.objects, packed, lifted)]
+  liftable = lifted.any(axis=1)
+  return dict(case=case.name, objects=objects,
+              packed=int(packed.sum()), packed_liftable=int((liftable & packed).sum()),
+              isolated_liftable=f'{int((liftable & ~packed).sum())}/{int((~packed).sum())}')
+
+
+def main():
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  config_lib.add_arguments(parser)
+  parser.add_argument('--cases', nargs='*', default=None,
+                      help='case numbers to run, e.g. 00 02 (default: all six)')
+  args = parser.parse_args()
+  enable_compilation_cache()
+  base = config_lib.from_arguments(args)
+  rotations = base.env.num_rotations // 2
+  paths = sorted(SUITE.glob('ordered-*.scn'))
+  if args.cases:
+    paths = [p for p in paths if p.stem.split('-')[1] in args.cases]
+  t0 = time.perf_counter()
+  results = [run_case(p, base, rotations) for p in paths]
+  packed = sum(r['packed'] for r in results)
+  liftable = sum(r['packed_liftable'] for r in results)
+  print(json.dumps(dict(
+      benchmark='ordered_graspability',
+      settings=dict(contact_timeconst=base.scene.contact_timeconst, timestep=base.scene.timestep,
+                    rotations=f'{rotations} of {base.env.num_rotations} (half turn)',
+                    grasp_depth=base.env.grasp_depth, backend=jax.default_backend(),
+                    machine=platform.machine(), cpu_count=len(jax.devices()), jax=jax.__version__,
+                    overrides=args.overrides),
+      cases=results,
+      packed_objects=packed, packed_liftable_without_push=liftable,
+      fraction_liftable=round(liftable / max(packed, 1), 3),
+      seconds_with_compile=round(time.perf_counter() - t0, 1)), indent=1))
+
+
+if __name__ == '__main__':
+  main()
