@@ -62,7 +62,7 @@ class EnvConfig:
   """Episode and primitive parameters."""
   num_objects: int = 10  # objects dropped by reset(key)
   num_rotations: int = 16
-  settle_steps: int = 250  # physics steps (1 s) for placed or dropped objects to come to rest
+  settle_steps: int = 375  # physics steps (1.5 s) for placed or dropped objects to come to rest
   drop_margin: float = 0.06  # keep dropped object centres this far inside the workspace
   layer_height: float = 0.12  # vertical spacing of drop layers
   # Grasp: descend to `grasp_depth` below the surface, close, lift `lift_height`.

@@ -66,15 +66,19 @@ def grid(shape, rows, cols, x0, y0, pitch_x, pitch_y, start_colour=0):
 
 
 def ordered_cases() -> list[str]:
-  """Blocks side by side, touching (1 mm gaps), as in the paper's Figure 7."""
+  """Blocks side by side, touching (1 mm gaps), as in the paper's Figure 7.
+
+  Every block is at least two deep both ways: a single row leaves the fingers room to close
+  across it (benchmarks/ordered_graspability.py measures which objects a grasp can still lift).
+  """
   g = 0.051  # 5 cm blocks, 1 mm apart
   cases = [
       grid('cube', 2, 2, -0.05, -0.05, g, g) + [line('cylinder', 'red', 0.15, 0.15, 0)],
-      grid('cube', 1, 5, -0.12, 0.0, g, g) + [line('disk', 'pink', 0.15, 0.15, 0)],
+      grid('cube', 2, 3, -0.08, -0.03, g, g) + [line('disk', 'pink', 0.15, 0.15, 0)],
       grid('cube', 3, 3, -0.1, -0.1, g, g) + [line('prism', 'red', 0.16, 0.16, 0)],
-      grid('flat_box', 4, 1, -0.1, -0.1, 0.101, g) + grid('cube', 1, 4, -0.12, 0.1, g, g, 4)
+      grid('flat_box', 4, 2, -0.15, -0.1, 0.101, g) + grid('cube', 2, 2, -0.175, 0.104, g, g, 8)
       + [line('octagon', 'pink', 0.16, -0.16, 0)],
-      grid('tall_box', 2, 4, -0.1, -0.05, g, g) + grid('cube', 1, 4, -0.1, 0.1, g, g, 8)
+      grid('tall_box', 2, 4, -0.1, -0.05, g, g) + grid('cube', 1, 4, -0.1, 0.052, g, g, 8)
       + [line('arch', 'red', 0.15, -0.16, 0)],
       grid('cube', 4, 4, -0.13, -0.13, g, g) + [line('cylinder', 'red', 0.17, 0.17, 0)],
   ]
