@@ -11,8 +11,8 @@ forces a push, the packed objects are not liftable; the case's isolated object i
 from __future__ import annotations
 
 import argparse
-import collections
 import json
+import os
 import pathlib
 import platform
 import sys
@@ -27,21 +27,13 @@ import numpy as np  # noqa: E402
 import eval as evaluate  # noqa: E402
 from envs import shapes  # noqa: E402
 from envs.primitives import GRASP, Action  # noqa: E402
-from envs.scenarios import case_to_layout, read_case  # noqa: E402
+from envs.scenarios import case_slots, case_to_layout, read_case  # noqa: E402
 from envs.tabletop import Tabletop  # noqa: E402
 from mvcoba_jax import config as config_lib  # noqa: E402
 from mvcoba_jax.runtime import enable_compilation_cache  # noqa: E402
 
 SUITE = pathlib.Path(__file__).resolve().parent.parent / 'suites' / 'ordered'
 PACKED = 0.06  # an object with a neighbour centre this close is packed; others are isolated
-
-
-def slots_of(case, env) -> list[int]:
-  """The slot each case object takes (case_to_layout's rule: next free slot of its shape)."""
-  free = collections.defaultdict(list)
-  for i, shape in enumerate(env.scene.index.slot_shapes):
-    free[shape].append(i)
-  return [free[o.shape].pop(0) for o in case.objects]
 
 
 def run_case(path: pathlib.Path, base, rotations: int) -> dict:
@@ -58,7 +50,7 @@ def run_case(path: pathlib.Path, base, rotations: int) -> dict:
                    x=jnp.asarray(xy[obj, 0], jnp.float32), y=jnp.asarray(xy[obj, 1], jnp.float32),
                    z=jnp.asarray(top[obj], jnp.float32))
   after, info = jax.jit(jax.vmap(env.step))(batch, actions)
-  slots = np.array(slots_of(case, env))[obj]
+  slots = np.array(case_slots(case, env))[obj]
   gone = ~np.asarray(after.in_play)[np.arange(n * rotations), slots]
   # The target itself was picked (not a neighbour, not knocked off the table).
   lifted = (gone & (np.asarray(info.picked) > 0) & (np.asarray(info.lost) == 0)).reshape(n, -1)
@@ -84,6 +76,8 @@ def main():
   paths = sorted(SUITE.glob('ordered-*.scn'))
   if args.cases:
     paths = [p for p in paths if p.stem.split('-')[1] in args.cases]
+    if len(paths) != len(set(args.cases)):
+      parser.error(f'--cases {" ".join(args.cases)}: the ordered suite has cases 00 to 05')
   t0 = time.perf_counter()
   results = [run_case(p, base, rotations) for p in paths]
   packed = sum(r['packed'] for r in results)
@@ -93,7 +87,7 @@ def main():
       settings=dict(contact_timeconst=base.scene.contact_timeconst, timestep=base.scene.timestep,
                     rotations=f'{rotations} of {base.env.num_rotations} (half turn)',
                     grasp_depth=base.env.grasp_depth, backend=jax.default_backend(),
-                    machine=platform.machine(), cpu_count=len(jax.devices()), jax=jax.__version__,
+                    machine=platform.machine(), cpu_count=os.cpu_count(), jax=jax.__version__,
                     overrides=args.overrides),
       cases=results,
       packed_objects=packed, packed_liftable_without_push=liftable,

@@ -288,8 +288,8 @@ def read_case(path, workspace_half: float = 0.224) -> Case:
 
 
 # ------------------------------------------------------------------------------ layouts
-def case_to_layout(case: Case, env) -> Layout:
-  """The starting layout of `case` in `env`: each object takes the next free slot of its shape."""
+def case_slots(case: Case, env) -> list[int]:
+  """The object slot of each of `case`'s objects: the next free slot of its shape."""
   slot_shapes = env.scene.index.slot_shapes
   need, have = collections.Counter(o.shape for o in case.objects), collections.Counter(slot_shapes)
   short = [f'{need[s]} {s!r} slots and the pool has {have[s]}' for s in need if need[s] > have[s]]
@@ -297,13 +297,17 @@ def case_to_layout(case: Case, env) -> Layout:
     raise ScenarioError(f'{case.path}: the case needs {"; ".join(short)}; add them to the '
                         'scene.pool setting')
   free = {s: [i for i, t in enumerate(slot_shapes) if t == s] for s in need}
+  return [free[o.shape].pop(0) for o in case.objects]
+
+
+def case_to_layout(case: Case, env) -> Layout:
+  """The starting layout of `case` in `env`, each object in its `case_slots` slot."""
   m = env.num_slots
   in_play = np.zeros(m, bool)
   pos = np.array([park_position(i) for i in range(m)])
   quat = np.tile([1.0, 0.0, 0.0, 0.0], (m, 1))
   color = np.full((m, 3), 0.5)
-  for obj in case.objects:
-    i = free[obj.shape].pop(0)
+  for i, obj in zip(case_slots(case, env), case.objects):
     in_play[i], pos[i], quat[i], color[i] = True, obj.pos, obj.quat, obj.color
   occ_pos, occ_quat = (np.array(a) for a in env.parked_occluders())
   for occ in case.occluders:
