@@ -223,7 +223,8 @@ def to_dict(config) -> dict:
 def from_dict(data: dict, cls=Config, where: str = 'config'):
   """The frozen `cls` dataclass of a `config.to_dict` dict (as JSON holds it: lists for tuples).
 
-  Missing fields keep their defaults, so older config.json files still load; unknown ones fail.
+  Missing fields keep their defaults, so older config.json files still load (`defaulted` names
+  them); unknown ones fail.
   """
   fields = {f.name for f in dataclasses.fields(cls)}
   unknown = sorted(set(data) - fields)
@@ -231,6 +232,19 @@ def from_dict(data: dict, cls=Config, where: str = 'config'):
     raise ConfigError(f'{where}: unknown keys {", ".join(unknown)} for {cls.__name__}')
   hints = typing.get_type_hints(cls)
   return cls(**{k: _value(v, hints[k], f'{where}.{k}') for k, v in data.items()})
+
+
+def defaulted(data: dict, config, prefix: str = '') -> dict:
+  """{dotted name: value} of the fields of `config` (= `from_dict(data)`) that `data` lacks and
+  that took their defaults: fields added after `data` was written, maybe not what its run used."""
+  found = {}
+  for f in dataclasses.fields(config):
+    value = getattr(config, f.name)
+    if f.name not in data:
+      found[prefix + f.name] = value
+    elif dataclasses.is_dataclass(value):
+      found.update(defaulted(data[f.name], value, f'{prefix}{f.name}.'))
+  return found
 
 
 def _value(value, tp, where: str):

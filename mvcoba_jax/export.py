@@ -17,6 +17,7 @@ import json
 import logging
 import pathlib
 import sys
+import warnings
 from unittest import mock
 
 import jax
@@ -55,9 +56,15 @@ def load(workdir) -> tuple[Config, networks.QNetwork, int]:
   if not (workdir / 'checkpoints').is_dir():  # Checkpoints() would create it
     raise ExportError(f'no checkpoints in {workdir / "checkpoints"}')
   try:
-    config = config_lib.from_dict(json.loads(config_path.read_text()), where=str(config_path))
+    saved = json.loads(config_path.read_text())
+    config = config_lib.from_dict(saved, where=str(config_path))
   except (ValueError, TypeError) as e:  # bad JSON or values that do not fit the fields
     raise ExportError(f'{config_path}: {e}') from None
+  defaulted = config_lib.defaulted(saved, config)
+  if defaulted:  # e.g. a run from before scene.contact_timeconst trained with other physics
+    warnings.warn(f'{config_path} lacks fields added since it was written; they take the current '
+                  f'defaults: {", ".join(f"{k}={v!r}" for k, v in defaulted.items())} '
+                  '(add them to it if its run used other values)', stacklevel=2)
   checkpoints = Checkpoints(workdir)
   step = checkpoints.latest()
   if step is None:

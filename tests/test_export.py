@@ -16,7 +16,7 @@ from flax import nnx
 
 from mvcoba_jax import agent, export, perception
 from mvcoba_jax.checkpoint import Checkpoints
-from mvcoba_jax.config import METHODS, ConfigError, from_dict, resolve, to_dict
+from mvcoba_jax.config import METHODS, ConfigError, defaulted, from_dict, resolve, to_dict
 from mvcoba_jax.training import Trainer
 from tests.helpers import layout, stack
 
@@ -209,6 +209,18 @@ def test_checkpoint_of_another_network_shape_is_a_clear_error(run, tmp_path, cap
   assert export.main(['--checkpoint', str(workdir), '--out', str(tmp_path / 'out')]) == 2
   err = capsys.readouterr().err
   assert 'network.features' in err and str(workdir / 'config.json') in err
+
+
+def test_config_json_from_before_a_field_existed_warns_with_the_default_it_takes(run, tmp_path):
+  workdir = tmp_path / 'old'
+  shutil.copytree(run[1], workdir)
+  saved = json.loads((workdir / 'config.json').read_text())
+  assert defaulted(saved, from_dict(saved)) == {}
+  del saved['scene']['contact_timeconst']
+  (workdir / 'config.json').write_text(json.dumps(saved))
+  with pytest.warns(UserWarning, match=r'config\.json lacks .* scene\.contact_timeconst=0\.008'):
+    config, _, _ = export.load(workdir)
+  assert config == run[0].config
 
 
 def test_config_round_trips_through_json(run):
