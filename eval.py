@@ -4,11 +4,14 @@
                  [--runs 5] [--max-actions 60] [--out eval_out] [--save-visuals]
   python eval.py --baseline heuristic --suite ordered        # no checkpoint needed
   python eval.py --compare runs/mvcoba runs/vpg ...          # same as several --checkpoint
+  python eval.py --tables runs/eval-a runs/eval-b --out X    # one table from earlier --out folders
 
 Every (case, run) pair of a suite runs in one jitted, vmapped call (cases padded to a common
 object-slot pool). One table per suite and metric: methods as rows, cases as columns (paper
-Tables 2-4); also written as JSON and Markdown to --out. With --save-visuals, each run also gets
-a PNG strip of its heightmaps and actions in --out/visuals/SUITE/METHOD/.
+Tables 2-4); also written as JSON and Markdown to --out, rewritten as each method finishes, so a
+killed evaluation keeps what it finished. --tables joins the results of evaluations run apart (in
+parallel, or on other machines) into one table, with no compile. With --save-visuals, each run also
+gets a PNG strip of its heightmaps and actions in --out/visuals/SUITE/METHOD/.
 """
 from __future__ import annotations
 
@@ -17,6 +20,7 @@ import collections
 import dataclasses
 import json
 import math
+import os
 import pathlib
 import sys
 import time
@@ -36,6 +40,10 @@ SUITES = ('random', 'ordered', 'occluded', 'isolated', 'vpg')
 VPG_CASES = REPO_ROOT.parent / 'shared' / 'vpg-test-cases'  # the 'vpg' suite's default folder
 METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action efficiency (%)'),
            ('completion', 'completion (%)'), ('grasp_to_push', 'grasp-to-push ratio'))
+
+
+class ResultsError(ValueError):
+  """An earlier evaluation's results.json that --tables cannot use."""
 
 
 def suite_files(names: list[str], vpg_dir: pathlib.Path) -> dict[str, list[pathlib.Path]]:
@@ -106,14 +114,67 @@ def json_safe(tree):
 
 
 def table(rows: dict[str, dict[str, dict]], key: str, label: str, cases: list[str]) -> str:
-  """A Markdown table: methods as rows, cases (and their mean) as columns."""
+  """A Markdown table: methods as rows, cases (and their mean) as columns ('-': undefined or not run)."""
   head = f'| {label} | ' + ' | '.join(cases) + ' | mean |\n|---|' + '---|' * (len(cases) + 1)
   lines = [head]
   for method, result in rows.items():
-    cells = [result['cases'][c][key] for c in cases] + [result['mean'][key]]
+    cells = [result['cases'].get(c, {}).get(key, math.nan) for c in cases] + [result['mean'][key]]
     lines.append(f'| {method} | ' + ' | '.join('-' if not math.isfinite(v) else f'{v:.1f}'
                                                 for v in cells) + ' |')
   return '\n'.join(lines)
+
+
+def suite_tables(suite: str, rows: dict[str, dict]) -> list[str]:
+  """One Markdown table per metric of a suite; its columns are every case any method ran."""
+  cases = list(dict.fromkeys(c for result in rows.values() for c in result['cases']))
+  return [f'### {suite}: {label}\n\n' + table(rows, key, label, cases) for key, label in METRICS]
+
+
+def scored(by_case: dict[str, list[metrics.RunLog]], wall_s: float) -> dict:
+  """A method's row of a suite: metrics per case and their means, with the runs they came from."""
+  per_case = {name: metrics.case_metrics(logs) for name, logs in by_case.items()}
+  return {'cases': per_case, 'mean': metrics.suite_average(per_case), 'wall_s': wall_s,
+          'runs': {name: [dataclasses.asdict(log) for log in logs]
+                   for name, logs in by_case.items()}}
+
+
+def write_report(report: dict, out: pathlib.Path) -> str:
+  """Writes results.json and results.md (each replaced whole, never half written); the Markdown."""
+  text = '\n\n'.join(t for suite, rows in report.items() for t in suite_tables(suite, rows)) + '\n'
+  for name, content in (('results.json', json.dumps(json_safe(report), indent=1)),
+                        ('results.md', text)):
+    partial = out / f'.{name}.partial'
+    partial.write_text(content)
+    os.replace(partial, out / name)
+  return text
+
+
+def joined_report(folders: list[str]) -> dict:
+  """The results.json of earlier evaluations as one report, scored again from their runs.
+
+  A method met twice in a suite gets its --out folder's name after it.
+  """
+  report = {}
+  for folder in folders:
+    path = pathlib.Path(folder) / 'results.json'
+    try:
+      data = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError) as e:
+      raise ResultsError(f'{path}: cannot read evaluation results ({e})') from None
+    for suite, rows in data.items():
+      for method, result in rows.items():
+        if 'runs' not in result:
+          raise ResultsError(f'{path}: {suite}/{method} holds no per-run counts (written '
+                              'before eval.py kept them); evaluate it again')
+        try:
+          by_case = {name: [metrics.RunLog(**log) for log in logs]
+                     for name, logs in result['runs'].items()}
+        except TypeError as e:
+          raise ResultsError(f'{path}: {suite}/{method}: a run log is malformed ({e})') from None
+        rows_here = report.setdefault(suite, {})
+        label = f'{method} ({pathlib.Path(folder).name})' if method in rows_here else method
+        rows_here[label] = scored(by_case, result.get('wall_s'))
+  return report
 
 
 def main(argv=None) -> int:
@@ -123,6 +184,9 @@ def main(argv=None) -> int:
                       help='work directories of train.py runs')
   parser.add_argument('--baseline', choices=('heuristic',),
                       help='a policy that needs no checkpoint')
+  parser.add_argument('--tables', nargs='+', default=[], metavar='EVAL_DIR',
+                      help='--out folders of earlier evaluations: print and write their joined '
+                           'tables, evaluate nothing')
   parser.add_argument('--suite', nargs='+', default=['all'],
                       help=f'{", ".join(SUITES)}, all, or paths of case files/folders')
   parser.add_argument('--runs', type=int, default=5, help='runs per case')
@@ -133,8 +197,21 @@ def main(argv=None) -> int:
   parser.add_argument('--save-visuals', action='store_true',
                       help='write a PNG strip of heightmaps and actions per run')
   args = parser.parse_args(argv)
+  if args.tables:
+    if args.checkpoint or args.baseline:
+      parser.error('--tables joins earlier results; give it without --checkpoint or --baseline')
+    try:
+      report = joined_report(args.tables)
+    except ResultsError as e:
+      print(f'error: {e}', file=sys.stderr)
+      return 2
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    print(write_report(report, out))
+    print(f'wrote {out / "results.json"} and {out / "results.md"}')
+    return 0
   if not args.checkpoint and not args.baseline:
-    parser.error('give --checkpoint DIR ... or --baseline heuristic')
+    parser.error('give --checkpoint DIR ..., --baseline heuristic or --tables EVAL_DIR ...')
   try:  # everything that can be wrong with the input fails here, before any compile
     base = config_lib.from_arguments(args)
     suites = {name: [read_case(f) for f in files]
@@ -148,7 +225,7 @@ def main(argv=None) -> int:
   enable_compilation_cache()
   out = pathlib.Path(args.out)
   out.mkdir(parents=True, exist_ok=True)
-  report, markdown = {}, []
+  report = {}
   for suite, cases in suites.items():
     names = [c.name for c in cases]
     rows = {}
@@ -177,19 +254,12 @@ def main(argv=None) -> int:
                              env.config)
         print(f'  visuals in {folder}', flush=True)
       by_case = {name: logs[i * args.runs:(i + 1) * args.runs] for i, name in enumerate(names)}
-      per_case = {name: metrics.case_metrics(case_logs) for name, case_logs in by_case.items()}
-      rows[method] = {'cases': per_case, 'mean': metrics.suite_average(per_case),
-                      'wall_s': time.perf_counter() - start,
-                      'runs': {name: [dataclasses.asdict(log) for log in case_logs]
-                               for name, case_logs in by_case.items()}}
+      rows[method] = scored(by_case, time.perf_counter() - start)
+      report[suite] = rows
+      write_report(report, out)
       print(f'  done in {rows[method]["wall_s"]:.0f} s', flush=True)
-    report[suite] = rows
-    for key, label in METRICS:
-      text = f'### {suite}: {label}\n\n' + table(rows, key, label, names)
-      markdown.append(text)
+    for text in suite_tables(suite, rows):
       print('\n' + text)
-  (out / 'results.json').write_text(json.dumps(json_safe(report), indent=1))
-  (out / 'results.md').write_text('\n\n'.join(markdown) + '\n')
   print(f'\nwrote {out / "results.json"} and {out / "results.md"}')
   return 0
 

@@ -123,3 +123,44 @@ def test_run_strip_draws_each_action_where_it_was_taken():
     assert cols.min() >= 10 * scale - 5 and cols.max() > 20 * scale  # rotation 0 points to +x
     assert np.ptp(rows) < 4 * scale
   assert not np.any(np.all(frame(0, 0) == viz.GRASP_FAILED_COLOR, axis=-1))
+
+
+def _results(folder, suite, method, runs_by_case):
+  """A results.json as eval.py writes it, holding only what --tables reads: the per-run counts."""
+  folder.mkdir()
+  runs = {case: [dict(zip(('actions', 'grasp_attempts', 'grasp_successes', 'objects', 'picked',
+                            'lost', 'completed'), r)) for r in rs]
+          for case, rs in runs_by_case.items()}
+  (folder / 'results.json').write_text(
+      json.dumps({suite: {method: {'wall_s': 10.0, 'runs': runs}}}))
+
+
+def test_tables_join_evaluations_run_apart_and_score_them_again(tmp_path, capsys):
+  _results(tmp_path / 'a', 'ordered', 'mvcoba', {'c0': [(4, 4, 4, 4, 4, 0, True)],
+                                                 'c1': [(5, 4, 3, 3, 3, 0, True)]})
+  _results(tmp_path / 'b', 'ordered', 'vpg', {'c0': [(6, 2, 1, 4, 1, 0, False)]})
+  _results(tmp_path / 'c', 'ordered', 'mvcoba', {'c1': [(3, 3, 3, 3, 3, 0, True)]})
+  code = eval_cli.main(['--tables', *(str(tmp_path / f) for f in 'abc'),
+                        '--out', str(tmp_path / 'joined')])
+  assert code == 0
+  report = json.loads((tmp_path / 'joined' / 'results.json').read_text())['ordered']
+  assert list(report) == ['mvcoba', 'vpg', 'mvcoba (c)']
+  # mvcoba: c0 4/4 grasps in 4 actions, c1 3/4 grasps and a push: 3 objects in 5 actions
+  assert report['mvcoba']['cases']['c1']['grasp_success'] == 75.0
+  assert report['mvcoba']['mean']['grasp_success'] == pytest.approx(87.5)
+  assert report['mvcoba']['mean']['action_efficiency'] == pytest.approx((100 + 60) / 2)
+  assert report['vpg']['cases']['c0']['grasp_to_push'] == 0.5
+  assert report['vpg']['mean']['completion'] == 0.0
+  text = (tmp_path / 'joined' / 'results.md').read_text()
+  assert '| vpg | 50.0 | - | 50.0 |' in text  # vpg ran no c1: its cell is '-'
+  assert '| mvcoba (c) | - | 100.0 | 100.0 |' in text
+  assert text in capsys.readouterr().out
+
+
+def test_tables_of_results_without_run_counts_fail_naming_the_file(tmp_path, capsys):
+  (tmp_path / 'old').mkdir()
+  (tmp_path / 'old' / 'results.json').write_text(json.dumps(
+      {'random': {'mvcoba': {'cases': {}, 'mean': {}, 'wall_s': 1.0}}}))
+  assert eval_cli.main(['--tables', str(tmp_path / 'old'), '--out', str(tmp_path / 'x')]) == 2
+  err = capsys.readouterr().err
+  assert 'old/results.json' in err and 'random/mvcoba' in err and 'per-run counts' in err
