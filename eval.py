@@ -114,7 +114,7 @@ def json_safe(tree):
 
 
 def table(rows: dict[str, dict[str, dict]], key: str, label: str, cases: list[str]) -> str:
-  """A Markdown table: methods as rows, cases (and their mean) as columns ('-': undefined or not run)."""
+  """A Markdown table: methods as rows, cases and their mean as columns ('-': undefined/not run)."""
   head = f'| {label} | ' + ' | '.join(cases) + ' | mean |\n|---|' + '---|' * (len(cases) + 1)
   lines = [head]
   for method, result in rows.items():
@@ -161,9 +161,11 @@ def joined_report(folders: list[str]) -> dict:
       data = json.loads(path.read_text())
     except (OSError, json.JSONDecodeError) as e:
       raise ResultsError(f'{path}: cannot read evaluation results ({e})') from None
+    if not isinstance(data, dict) or not all(isinstance(rows, dict) for rows in data.values()):
+      raise ResultsError(f'{path}: not the results of eval.py (suite -> method -> results)')
     for suite, rows in data.items():
       for method, result in rows.items():
-        if 'runs' not in result:
+        if not isinstance(result, dict) or 'runs' not in result:
           raise ResultsError(f'{path}: {suite}/{method} holds no per-run counts (written '
                               'before eval.py kept them); evaluate it again')
         try:

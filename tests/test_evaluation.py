@@ -164,3 +164,7 @@ def test_tables_of_results_without_run_counts_fail_naming_the_file(tmp_path, cap
   assert eval_cli.main(['--tables', str(tmp_path / 'old'), '--out', str(tmp_path / 'x')]) == 2
   err = capsys.readouterr().err
   assert 'old/results.json' in err and 'random/mvcoba' in err and 'per-run counts' in err
+  (tmp_path / 'list').mkdir()
+  (tmp_path / 'list' / 'results.json').write_text('[1, 2]')
+  assert eval_cli.main(['--tables', str(tmp_path / 'list'), '--out', str(tmp_path / 'x')]) == 2
+  assert 'list/results.json: not the results of eval.py' in capsys.readouterr().err
