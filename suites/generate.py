@@ -2,7 +2,7 @@
 
   python suites/generate.py
 
-- random/: 6 cases of 20-40 objects dropped in a pile (layers that settle onto each other);
+- random/: 6 cases of 20-40 objects heaped over the workspace, each set down onto the heap;
 - ordered/: 6 well-ordered cases of 4-17 blocks packed with no room for the fingers between them;
 - occluded/: 3 cases: camera 1 fully blocked; both cameras partly blocked so that some objects
   are seen by one camera only;
@@ -39,25 +39,38 @@ def half_height(shape):
   return 0.5 * float(shapes.SHAPES[shape].rest_extent[2])
 
 
-def random_case(n: int, seed: int) -> str:
-  """A pile of n objects in x, y in [-0.2, 0.1], and one isolated object in a far corner."""
+PILE_HALF = 0.155  # object centres of a random heap keep 7 cm inside the workspace (22.4 cm)
+ISOLATED_SPOT = (0.17, 0.17)
+ISOLATED_GAP = 0.03  # clear space between the isolated object's and the heap's footprints
+
+
+def random_case(n: int, seed: int, spots_per_object: int = 64) -> str:
+  """A heap of n objects over the workspace, and one isolated object in a corner kept clear.
+
+  Each object goes to the lowest of `spots_per_object` random spots, just above every object
+  already placed whose footprint circle its own overlaps: the heap is built as if each object
+  were set down gently onto it, so settling moves objects millimetres, not the decimetres of a
+  drop that scatters them out of the workspace (benchmarks/suite_settling.py counts those that
+  still go).
+  """
   rng = np.random.default_rng(seed)
-  placed = []  # (x, y, radius, layer)
+  isolated = ISOLATED[seed % len(ISOLATED)]
+  placed = []  # (x, y, footprint radius, top z)
   text = HEADER
   for i in range(n):
     shape = CLUTTER_SHAPES[rng.integers(len(CLUTTER_SHAPES))]
     radius = shapes.footprint_radius(shape)
-    for layer in range(20):
-      spots = rng.uniform(-0.2, 0.1, size=(32, 2))
-      free = [s for s in spots if all(l != layer or np.hypot(*(s - (x, y))) > radius + r + 0.004
-                                      for x, y, r, l in placed)]
-      if free:
-        x, y = free[0]
-        break
-    placed.append((x, y, radius, layer))
-    z = half_height(shape) + 0.001 + 0.12 * layer
-    text += line(shape, COLOR_NAMES[i % 10], x, y, rng.uniform(0, 180), z if layer else None)
-  return text + line(ISOLATED[seed % len(ISOLATED)], COLOR_NAMES[n % 10], 0.17, 0.17, 0)
+    clear = radius + shapes.footprint_radius(isolated) + ISOLATED_GAP
+    spots = rng.uniform(-PILE_HALF, PILE_HALF, size=(4 * spots_per_object, 2))
+    spots = spots[np.hypot(*(spots - ISOLATED_SPOT).T) > clear][:spots_per_object]
+    base = [max([top for x, y, r, top in placed if np.hypot(*(s - (x, y))) < radius + r + 0.004],
+                default=0.0) for s in spots]
+    best = int(np.argmin(base))
+    z = base[best] + half_height(shape) + 0.001
+    placed.append((*spots[best], radius, z + half_height(shape)))
+    text += line(shape, COLOR_NAMES[i % 10], *spots[best], rng.uniform(0, 180),
+                 z if base[best] else None)
+  return text + line(isolated, COLOR_NAMES[n % 10], *ISOLATED_SPOT, 0)
 
 
 def grid(shape, rows, cols, x0, y0, pitch_x, pitch_y, start_colour=0):
@@ -115,14 +128,18 @@ def isolated_cases() -> list[str]:
   return cases
 
 
-def main():
-  suites = {
+def suites() -> dict[str, list[str]]:
+  """Suite name -> the text of each of its case files."""
+  return {
       'random': [random_case(n, seed) for seed, n in enumerate((20, 24, 28, 32, 36, 40))],
       'ordered': ordered_cases(),
       'occluded': occluded_cases(),
       'isolated': isolated_cases(),
   }
-  for suite, cases in suites.items():
+
+
+def main():
+  for suite, cases in suites().items():
     folder = ROOT / suite
     folder.mkdir(exist_ok=True)
     for i, text in enumerate(cases):

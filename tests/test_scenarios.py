@@ -16,13 +16,16 @@ from envs.scenarios import (Case, CaseObject, ScenarioError, case_to_layout, hal
                             read_case, stack_layouts, write_scenario)
 from envs.scene import GRIPPER_PARK, park_position
 from envs.tabletop import Tabletop
+from eval import pool_for, suite_config
 from mvcoba_jax.config import resolve
 from mvcoba_jax.geometry import quat_mul, yaw_quat
+from suites import generate
 
 VPG_CASES = pathlib.Path(os.environ.get(
     'MVCOBA_VPG_CASES', pathlib.Path(__file__).resolve().parents[2] / 'shared' / 'vpg-test-cases'))
 VPG_COUNTS = (4, 5, 3, 5, 5, 6, 3, 6, 6, 5, 4)
-CONFIGS = pathlib.Path(__file__).resolve().parents[1] / 'configs'
+REPO = pathlib.Path(__file__).resolve().parents[1]
+CONFIGS = REPO / 'configs'
 
 SCN = """\
 # a little case
@@ -214,20 +217,46 @@ def test_public_vpg_cases_rest_at_their_heights(public_cases):
                  ('10', 7, 'octagon'), ('09', 3, 'cylinder')}
 
 
+def deepest_overlap(env, layout) -> float:
+  """Deepest contact (m) between the objects of `layout` and the table, by native MuJoCo."""
+  m, idx = env.scene.mj_model, env.scene.index
+  d = mujoco.MjData(m)
+  d.qpos[:] = m.qpos0
+  d.qpos[idx.gripper_qpos[:3]] = GRIPPER_PARK
+  for i, adr in enumerate(idx.slot_qpos):
+    d.qpos[adr:adr + 7] = np.concatenate([layout.pos[i], layout.quat[i]])
+  mujoco.mj_forward(m, d)
+  return -min([0.0] + [d.contact.dist[k] for k in range(d.ncon)])
+
+
 def test_public_vpg_cases_do_not_interpenetrate(public_cases):
   env = Tabletop(resolve(CONFIGS / 'default.py'))
   layouts = [case_to_layout(c, env) for c in public_cases]
   batch = stack_layouts(layouts)
   assert batch.pos.shape == (len(layouts), env.num_slots, 3)
-  m, idx = env.scene.mj_model, env.scene.index
-  d = mujoco.MjData(m)
   for case, layout in zip(public_cases, layouts):
-    d.qpos[:] = m.qpos0
-    d.qpos[idx.gripper_qpos[:3]] = GRIPPER_PARK
-    for i, adr in enumerate(idx.slot_qpos):
-      d.qpos[adr:adr + 7] = np.concatenate([layout.pos[i], layout.quat[i]])
-    mujoco.mj_forward(m, d)
-    deepest = -min([0.0] + [d.contact.dist[k] for k in range(d.ncon)])
+    deepest = deepest_overlap(env, layout)
+    assert deepest < 0.002, (case.name, deepest)
+
+
+# ------------------------------------------------------------------------------ shipped suites
+SHIPPED = {'random': (6, 20, 40), 'ordered': (6, 4, 17), 'occluded': (3, 4, 5)}
+
+
+@pytest.mark.parametrize('suite', sorted(SHIPPED))
+def test_shipped_suites_are_generated_and_start_apart(suite):
+  """The files are what suites/generate.py writes, with the issue's case and object counts;
+  every object (the isolated one too) starts clear of the others and of the table."""
+  texts = generate.suites()[suite]
+  files = sorted((REPO / 'suites' / suite).glob('*.scn'))
+  assert [f.read_text() for f in files] == texts, 'run python suites/generate.py'
+  cases = [read_case(f) for f in files]
+  n_cases, fewest, most = SHIPPED[suite]
+  assert len(cases) == n_cases
+  assert all(fewest + 1 <= len(c.objects) <= most + 1 for c in cases)  # + the isolated object
+  env = Tabletop(suite_config(resolve(CONFIGS / 'default.py'), pool_for(cases)))
+  for case in cases:
+    deepest = deepest_overlap(env, case_to_layout(case, env))
     assert deepest < 0.002, (case.name, deepest)
 
 

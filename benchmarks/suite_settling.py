@@ -1,0 +1,76 @@
+"""How many objects of each case stay in the workspace while the case settles.
+
+A run is scored against the objects in play after `reset_from_case` settles the case, so objects
+that slide or bounce out while a pile settles never count. This settles every case of a suite
+with `--keys` placement jitters, exactly as `eval.py` starts its runs (same scene, same jitter),
+and prints one JSON object: per case, the objects its file lists, those still in play after
+each key, and those of them within `--edge` of the workspace's border (a run loses objects
+there to any push or nudge). A suite name or a folder of case files (e.g. a candidate from suites/generate.py).
+
+  python benchmarks/suite_settling.py [--suite random] [--keys 2] [--edge 0.03]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / 'benchmarks'))
+
+import jax  # noqa: E402
+import numpy as np  # noqa: E402
+
+import eval as evaluation_cli  # noqa: E402
+from envs.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
+from envs.tabletop import Tabletop  # noqa: E402
+from mvcoba_jax import evaluation  # noqa: E402
+from mvcoba_jax.config import resolve  # noqa: E402
+from physics import settings  # noqa: E402
+
+
+def settle(files: list[pathlib.Path], keys: int, edge: float) -> list[dict]:
+  cases = [read_case(f) for f in files]
+  env = Tabletop(evaluation_cli.suite_config(resolve(None), evaluation_cli.pool_for(cases)))
+  layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(keys)])
+  run_keys = jax.random.split(jax.random.PRNGKey(0), len(cases) * keys)
+  start = jax.jit(jax.vmap(lambda layout, key: env.reset_from_case(
+      evaluation.jitter(layout, key), key)))
+  states = start(layouts, run_keys)
+  xy = np.abs(np.asarray(jax.vmap(env.object_positions)(states))[..., :2]).max(axis=-1)
+  play = np.asarray(states.in_play)
+  near = play & (xy > env.config.scene.workspace_half - edge)
+  in_play, near = (a.sum(axis=1).reshape(len(cases), keys) for a in (play, near))
+  return [{'case': c.name, 'listed': len(c.objects), 'in_play': in_play[i].tolist(),
+           'near_edge': near[i].tolist(),
+           'left_workspace_max': int(len(c.objects) - in_play[i].min())}
+          for i, c in enumerate(cases)]
+
+
+def main():
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument('--suite', default='random', help='a suite name or a folder of cases')
+  parser.add_argument('--keys', type=int, default=2, help='placement jitters per case')
+  parser.add_argument('--edge', type=float, default=0.03, help='m from the border: near it')
+  args = parser.parse_args()
+  files = evaluation_cli.suite_files([args.suite], evaluation_cli.VPG_CASES)[args.suite]
+  t0 = time.perf_counter()
+  rows = settle(files, args.keys, args.edge)
+  listed = sum(r['listed'] for r in rows) * args.keys
+  kept = sum(sum(r['in_play']) for r in rows)
+  print(json.dumps({
+      'benchmark': 'suite_settling',
+      'settings': {**settings(), 'suite': args.suite, 'keys': args.keys, 'edge': args.edge,
+                   'settle_steps': resolve(None).env.settle_steps},
+      'wall_s': time.perf_counter() - t0,
+      'objects_kept_fraction': kept / listed,
+      'near_edge_total': sum(sum(r['near_edge']) for r in rows),
+      'results': rows,
+  }, indent=1))
+
+
+if __name__ == '__main__':
+  main()
