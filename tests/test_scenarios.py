@@ -20,6 +20,7 @@ from eval import pool_for, suite_config
 from mvcoba_jax.config import resolve
 from mvcoba_jax.geometry import quat_mul, yaw_quat
 from suites import generate
+from tests.penetration import max_penetration
 
 VPG_CASES = pathlib.Path(os.environ.get(
     'MVCOBA_VPG_CASES', pathlib.Path(__file__).resolve().parents[2] / 'shared' / 'vpg-test-cases'))
@@ -218,15 +219,13 @@ def test_public_vpg_cases_rest_at_their_heights(public_cases):
 
 
 def deepest_overlap(env, layout) -> float:
-  """Deepest contact (m) between the objects of `layout` and the table, by native MuJoCo."""
-  m, idx = env.scene.mj_model, env.scene.index
-  d = mujoco.MjData(m)
-  d.qpos[:] = m.qpos0
-  d.qpos[idx.gripper_qpos[:3]] = GRIPPER_PARK
+  """Deepest contact (m) between the objects of `layout` and the table, as placed (no physics)."""
+  idx = env.scene.index
+  qpos = env.scene.mj_model.qpos0.copy()
+  qpos[idx.gripper_qpos[:3]] = GRIPPER_PARK
   for i, adr in enumerate(idx.slot_qpos):
-    d.qpos[adr:adr + 7] = np.concatenate([layout.pos[i], layout.quat[i]])
-  mujoco.mj_forward(m, d)
-  return -min([0.0] + [d.contact.dist[k] for k in range(d.ncon)])
+    qpos[adr:adr + 7] = np.concatenate([layout.pos[i], layout.quat[i]])
+  return max_penetration(env, qpos)
 
 
 def test_public_vpg_cases_do_not_interpenetrate(public_cases):
