@@ -5,7 +5,8 @@ that slide or bounce out while a pile settles never count. This settles every ca
 with `--keys` placement jitters, exactly as `eval.py` starts its runs (same scene, same jitter),
 and prints one JSON object: per case, the objects its file lists, those still in play after
 each key, and those of them within `--edge` of the workspace's border (a run loses objects
-there to any push or nudge). A suite name or a folder of case files (e.g. a candidate from suites/generate.py).
+there to any push or nudge). `--suite` takes a suite's name or a folder of case files (e.g. a
+candidate written by suites/generate.py's `random_case`). Settling uses the default preset.
 
   python benchmarks/suite_settling.py [--suite random] [--keys 2] [--edge 0.03]
 """
