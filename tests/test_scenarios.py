@@ -242,11 +242,16 @@ def test_public_vpg_cases_do_not_interpenetrate(public_cases):
 SHIPPED = {'random': (6, 20, 40), 'ordered': (6, 4, 17), 'occluded': (3, 4, 5)}
 
 
+@pytest.fixture(scope='module')
+def generated():
+  return generate.suites()
+
+
 @pytest.mark.parametrize('suite', sorted(SHIPPED))
-def test_shipped_suites_are_generated_and_start_apart(suite):
+def test_shipped_suites_are_generated_and_start_apart(suite, generated):
   """The files are what suites/generate.py writes, with the issue's case and object counts;
   every object (the isolated one too) starts clear of the others and of the table."""
-  texts = generate.suites()[suite]
+  texts = generated[suite]
   files = sorted((REPO / 'suites' / suite).glob('*.scn'))
   assert [f.read_text() for f in files] == texts, 'run python suites/generate.py'
   cases = [read_case(f) for f in files]
