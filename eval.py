@@ -11,7 +11,8 @@ object-slot pool). One table per suite and metric: methods as rows, cases as col
 Tables 2-4); also written as JSON and Markdown to --out, rewritten as each method finishes, so a
 killed evaluation keeps what it finished. --tables joins the results of evaluations run apart (in
 parallel, or on other machines) into one table, with no compile. With --save-visuals, each run also
-gets a PNG strip of its heightmaps and actions in --out/visuals/SUITE/METHOD/.
+gets a PNG strip of its heightmaps and actions in --out/visuals/SUITE/METHOD/, beside losses.json:
+every object that left the workspace, the action it left in and where it was when it began.
 """
 from __future__ import annotations
 
@@ -39,7 +40,8 @@ from mvcoba_jax.runtime import REPO_ROOT, enable_compilation_cache
 SUITES = ('random', 'ordered', 'occluded', 'isolated', 'vpg')
 VPG_CASES = REPO_ROOT.parent / 'shared' / 'vpg-test-cases'  # the 'vpg' suite's default folder
 METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action efficiency (%)'),
-           ('completion', 'completion (%)'), ('grasp_to_push', 'grasp-to-push ratio'))
+           ('completion', 'completion (%)'), ('objects_picked', 'objects picked (%)'),
+           ('grasp_to_push', 'grasp-to-push ratio'))
 
 
 class ResultsError(ValueError):
@@ -136,6 +138,16 @@ def scored(by_case: dict[str, list[metrics.RunLog]], wall_s: float) -> dict:
   return {'cases': per_case, 'mean': metrics.suite_average(per_case), 'wall_s': wall_s,
           'runs': {name: [dataclasses.asdict(log) for log in logs]
                    for name, logs in by_case.items()}}
+
+
+def loss_summary(lost: list[dict]) -> str:
+  """One line on the objects that left the workspace (see `evaluation.losses`)."""
+  grasps = [r for r in lost if r['primitive'] == 'grasp']
+  return (f'{len(lost)} objects left the workspace ({len(grasps)} during grasps, '
+          f'{len(lost) - len(grasps)} during pushes; '
+          f'{sum(r["distance_to_gripper"] <= 0.03 for r in lost)} began within 3 cm of the '
+          f'gripper\'s target, {sum(r["margin_to_border"] <= 0.03 for r in lost)} within 3 cm of '
+          'the border): losses.json')
 
 
 def write_report(report: dict, out: pathlib.Path) -> str:
@@ -251,10 +263,11 @@ def main(argv=None) -> int:
         logs = evaluation.run_logs(runs)
       if args.save_visuals:
         folder = out / 'visuals' / pathlib.Path(suite).name / method.replace(':', '_')
-        viz.write_run_strips(jax.device_get(runs.trace),
-                             [f'{n}_run{r}' for n in names for r in range(args.runs)], folder,
-                             env.config)
-        print(f'  visuals in {folder}', flush=True)
+        run_names = [f'{n}_run{r}' for n in names for r in range(args.runs)]
+        viz.write_run_strips(jax.device_get(runs.trace), run_names, folder, env.config)
+        lost = evaluation.losses(runs.trace, run_names, env.config)
+        (folder / 'losses.json').write_text(json.dumps(lost, indent=1))
+        print(f'  visuals in {folder}; {loss_summary(lost)}', flush=True)
       by_case = {name: logs[i * args.runs:(i + 1) * args.runs] for i, name in enumerate(names)}
       rows[method] = scored(by_case, time.perf_counter() - start)
       report[suite] = rows

@@ -50,6 +50,7 @@ class StepInfo:
   grasp_success: jnp.ndarray  # bool
   picked: jnp.ndarray  # int32: objects removed by this grasp
   lost: jnp.ndarray  # int32: objects that left the workspace during this step
+  left_workspace: jnp.ndarray  # (M,) bool: which objects those were
   healthy: jnp.ndarray  # bool
 
 
@@ -218,7 +219,7 @@ class Tabletop:
     in_play = state.in_play & ~picked & ~lost
     healthy = self._health(data)
     info = StepInfo(grasp_success=jnp.any(picked), picked=jnp.sum(picked, dtype=jnp.int32),
-                    lost=jnp.sum(lost, dtype=jnp.int32), healthy=healthy)
+                    lost=jnp.sum(lost, dtype=jnp.int32), left_workspace=lost, healthy=healthy)
     state = state.replace(data=self._finish(data, in_play), in_play=in_play,
                           picked=state.picked + info.picked, lost=state.lost + info.lost,
                           healthy=healthy)

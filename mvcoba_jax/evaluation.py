@@ -12,11 +12,13 @@ from typing import Callable
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from flax import struct
 
 from envs.tabletop import Layout, Tabletop, where_envs
 from mvcoba_jax import agent, perception
-from mvcoba_jax.geometry import quat_mul, yaw_quat
+from mvcoba_jax.config import Config
+from mvcoba_jax.geometry import pixel_to_world, quat_mul, yaw_quat
 from mvcoba_jax.metrics import RunLog
 
 POSITION_NOISE = 0.002  # m, per axis, on each object's start position
@@ -29,8 +31,11 @@ Policy = Callable[[perception.Observation, jnp.ndarray, jnp.ndarray], agent.Pixe
 
 @struct.dataclass
 class Trace:
-  """What each run saw and did, step by step (N, T, ...): for pictures of the runs."""
+  """What each run saw and did, step by step (N, T, ...): for pictures of the runs and for
+  tracing where objects leave the workspace."""
   color: jnp.ndarray  # (N, T, V, R, R, 3) uint8: every view's colour heightmap before the action
+  object_xyz: jnp.ndarray  # (N, T, M, 3): every object slot's centre before the action
+  left_workspace: jnp.ndarray  # (N, T, M) bool: the objects that left during the action
   primitive: jnp.ndarray  # (N, T) int32
   rotation: jnp.ndarray
   row: jnp.ndarray
@@ -87,15 +92,16 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
               lost=zeros, objects=jnp.sum(states.in_play, axis=1, dtype=jnp.int32),
               failures=zeros, finished=jnp.zeros(n, bool), completed=jnp.zeros(n, bool))
 
-  def snapshot(obs, action: agent.PixelAction, grasp_success, active) -> Trace:
+  def snapshot(obs, states, action: agent.PixelAction, left, grasp_success, active) -> Trace:
     """One step of every run (N, ...), as the trace keeps it."""
-    return Trace(color=perception.color_to_uint8(obs.color), primitive=action.primitive,
-                 rotation=action.rotation, row=action.row, col=action.col,
-                 grasp_success=grasp_success, active=active)
+    return Trace(color=perception.color_to_uint8(obs.color),
+                 object_xyz=jax.vmap(env.object_positions)(states), left_workspace=left,
+                 primitive=action.primitive, rotation=action.rotation, row=action.row,
+                 col=action.col, grasp_success=grasp_success, active=active)
 
   if record:
-    step = snapshot(obs, agent.PixelAction(zeros, zeros, zeros, zeros), runs.finished,
-                    runs.finished)
+    step = snapshot(obs, states, agent.PixelAction(zeros, zeros, zeros, zeros), states.in_play,
+                    runs.finished, runs.finished)
     runs = runs.replace(trace=jax.tree.map(
         lambda x: jnp.zeros((n, max_actions) + x.shape[1:], x.dtype), step))
   carry = (states, obs, jnp.ones(n, bool), runs, k_loop, jnp.int32(0))
@@ -124,7 +130,8 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
         completed=runs.completed | (active & cleared & (picked == runs.objects)))
     if record:
       runs = runs.replace(trace=jax.tree.map(lambda buf, x: buf.at[:, t].set(x), runs.trace,
-                                             snapshot(obs, action, info.grasp_success, active)))
+                                             snapshot(obs, states, action, info.left_workspace,
+                                                      info.grasp_success, active)))
     if progress is not None:
       jax.debug.callback(progress, t + 1, jnp.sum(runs.finished))
     return (where_envs(active, next_states, states), where_envs(active, next_obs, obs),
@@ -142,6 +149,32 @@ def run_logs(runs: Runs) -> list[RunLog]:
   return [RunLog(actions=r.actions[i], grasp_attempts=r.grasp_attempts[i],
                  grasp_successes=r.grasp_successes[i], objects=r.objects[i], picked=r.picked[i],
                  lost=r.lost[i], completed=r.completed[i]) for i in range(len(r.actions))]
+
+
+def losses(trace: Trace, names: list[str], config: Config) -> list[dict]:
+  """Every object that left the workspace in a recorded evaluation, with the action it left in.
+
+  Host side, from `Runs.trace`; `names[i]` names run i. Where the object was when the action
+  began, how far from the gripper's target and from the workspace's border, tells a grasp that
+  drops its object from a push that shoves a neighbour over the edge.
+  """
+  half = config.scene.workspace_half
+  trace = jax.device_get(trace)
+  left = np.asarray(trace.left_workspace) & np.asarray(trace.active)[..., None]
+  records = []
+  for run, t, slot in zip(*np.nonzero(left)):
+    x, y = pixel_to_world(trace.row[run, t], trace.col[run, t],
+                          config.perception.heightmap_resolution, half)
+    xyz = np.asarray(trace.object_xyz[run, t, slot], float)
+    records.append({
+        'run': names[run], 'action': int(t), 'slot': int(slot),
+        'primitive': 'grasp' if trace.primitive[run, t] == agent.GRASP else 'push',
+        'grasp_success': bool(trace.grasp_success[run, t]),
+        'object_xyz': [round(float(v), 4) for v in xyz],
+        'gripper_xy': [round(float(x), 4), round(float(y), 4)],
+        'distance_to_gripper': round(float(np.hypot(xyz[0] - x, xyz[1] - y)), 4),
+        'margin_to_border': round(float(half - np.max(np.abs(xyz[:2]))), 4)})
+  return records
 
 
 def greedy_policy(q_maps: Callable, method: str) -> Policy:

@@ -84,7 +84,9 @@ def test_eval_cli_writes_tables_and_visuals(setup, tmp_path, capsys):
                         'configs/tiny.py', '--runs', '1', '--max-actions', str(MAX_ACTIONS),
                         '--out', str(tmp_path / 'out'), '--save-visuals'])
   assert code == 0
-  assert '/2 runs finished' in capsys.readouterr().err  # progress from inside the jitted loop
+  captured = capsys.readouterr()
+  assert '/2 runs finished' in captured.err  # progress from inside the jitted loop
+  assert 'objects left the workspace' in captured.out
   text = (tmp_path / 'out' / 'results.md').read_text()
   assert 'grasp success' in text and 'pair' in text and 'baseline:heuristic' in text
   report = json.loads((tmp_path / 'out' / 'results.json').read_text())
@@ -95,6 +97,8 @@ def test_eval_cli_writes_tables_and_visuals(setup, tmp_path, capsys):
   assert run['picked'] + run['lost'] <= run['objects']
   strips = sorted((tmp_path / 'out' / 'visuals' / folder.name / 'baseline_heuristic').glob('*.png'))
   assert [p.name for p in strips] == ['pair_run0.png', 'three_run0.png']
+  lost = json.loads((strips[0].parent / 'losses.json').read_text())
+  assert len(lost) == sum(r['lost'] for rs in row['runs'].values() for r in rs)
   image = cv2.imread(str(strips[0]))
   side = image.shape[0] // 2  # two views stacked, each a square heightmap scaled up
   assert image.shape[1] == actions * (side + 4) - 4
@@ -107,7 +111,8 @@ def test_run_strip_draws_each_action_where_it_was_taken():
   r, scale = 56, 3
   steps = lambda *v: np.array([v])
   trace = evaluation.Trace(
-      color=np.zeros((1, 3, 2, r, r, 3), np.uint8), primitive=steps(1, 1, 0),
+      color=np.zeros((1, 3, 2, r, r, 3), np.uint8), object_xyz=np.zeros((1, 3, 1, 3)),
+      left_workspace=np.zeros((1, 3, 1), bool), primitive=steps(1, 1, 0),
       rotation=steps(0, 0, 0), row=steps(10, 30, 40), col=steps(20, 30, 10),
       grasp_success=steps(True, False, False), active=steps(True, True, True))
   image = viz.run_strip(trace, 0, config, scale=scale)
@@ -151,6 +156,7 @@ def test_tables_join_evaluations_run_apart_and_score_them_again(tmp_path, capsys
   assert report['mvcoba']['mean']['action_efficiency'] == pytest.approx((100 + 60) / 2)
   assert report['vpg']['cases']['c0']['grasp_to_push'] == 0.5
   assert report['vpg']['mean']['completion'] == 0.0
+  assert report['vpg']['mean']['objects_picked'] == 25.0  # 1 of its 4 objects
   text = (tmp_path / 'joined' / 'results.md').read_text()
   assert '| vpg | 50.0 | - | 50.0 |' in text  # vpg ran no c1: its cell is '-'
   assert '| mvcoba (c) | - | 100.0 | 100.0 |' in text
@@ -168,3 +174,27 @@ def test_tables_of_results_without_run_counts_fail_naming_the_file(tmp_path, cap
   (tmp_path / 'list' / 'results.json').write_text('[1, 2]')
   assert eval_cli.main(['--tables', str(tmp_path / 'list'), '--out', str(tmp_path / 'x')]) == 2
   assert 'list/results.json: not the results of eval.py' in capsys.readouterr().err
+
+
+def test_losses_name_the_action_and_where_the_object_was():
+  """One object leaves in run 0's second action (a push from the middle of the heightmap); a
+  loss marked after the run had finished does not count."""
+  config = resolve('configs/tiny.py')
+  steps = lambda *v: np.array([v])
+  xyz = np.zeros((1, 3, 2, 3))
+  xyz[0, 1, 1] = (0.2, -0.05, 0.03)
+  left = np.zeros((1, 3, 2), bool)
+  left[0, 1, 1] = left[0, 2, 0] = True
+  r = int(round(2 * config.scene.workspace_half / config.perception.heightmap_resolution))
+  trace = evaluation.Trace(
+      color=np.zeros((1, 3, 2, r, r, 3), np.uint8), object_xyz=xyz, left_workspace=left,
+      primitive=steps(1, 0, 1), rotation=steps(0, 0, 0), row=steps(0, r // 2, 0),
+      col=steps(0, r // 2, 0), grasp_success=steps(True, False, False),
+      active=steps(True, True, False))
+  (record,) = evaluation.losses(trace, ['c_run0'], config)
+  half = config.perception.heightmap_resolution / 2  # the centre of cell (r/2, r/2)
+  assert record['run'] == 'c_run0' and record['action'] == 1 and record['slot'] == 1
+  assert record['primitive'] == 'push' and not record['grasp_success']
+  assert record['gripper_xy'] == pytest.approx([half, half], abs=1e-4)
+  assert record['distance_to_gripper'] == pytest.approx(np.hypot(0.2 - half, 0.05 + half), abs=1e-4)
+  assert record['margin_to_border'] == pytest.approx(config.scene.workspace_half - 0.2, abs=1e-4)

@@ -15,6 +15,7 @@ def test_case_metrics_by_hand():
   assert m['grasp_success'] == 100.0 * 8 / 18
   assert m['action_efficiency'] == 100.0 * 8 / 15
   assert m['completion'] == 100.0 * 2 / 3
+  assert m['objects_picked'] == 100.0 * 8 / 12  # the paper's completion: objects, not runs
   assert m['grasp_to_push'] == 18 / 4
   assert m['runs'] == 3 and m['actions'] == 22
 
@@ -22,13 +23,14 @@ def test_case_metrics_by_hand():
 def test_nothing_completed_and_no_pushes():
   m = case_metrics([RunLog(6, 6, 0, 3, 0, 0, False)])
   assert math.isnan(m['action_efficiency']) and m['completion'] == 0.0
+  assert m['objects_picked'] == 0.0
   assert m['grasp_to_push'] == math.inf and m['grasp_success'] == 0.0
 
 
 def test_suite_average_skips_missing_cells():
   avg = suite_average({'a': {'grasp_success': 50.0, 'action_efficiency': float('nan'),
-                             'completion': 0.0, 'grasp_to_push': 2.0},
+                             'completion': 0.0, 'objects_picked': 90.0, 'grasp_to_push': 2.0},
                        'b': {'grasp_success': 100.0, 'action_efficiency': 80.0,
-                             'completion': 100.0, 'grasp_to_push': 4.0}})
+                             'completion': 100.0, 'objects_picked': 100.0, 'grasp_to_push': 4.0}})
   assert avg == {'grasp_success': 75.0, 'action_efficiency': 80.0, 'completion': 50.0,
-                 'grasp_to_push': 3.0}
+                 'objects_picked': 95.0, 'grasp_to_push': 3.0}

@@ -51,6 +51,9 @@ def outcome(env, compiled):
     layouts.append(layout(env, [(CUBE, 0.0, 0.0, 0.0)]))
     rows.append((PUSH, k, -0.05 * np.cos(a), -0.05 * np.sin(a), 0.05))
     names.append(f'push{k}')
+  layouts.append(layout(env, [(CUBE, 0.19, 0.0, 0.0)]))  # 3.4 cm inside the border, pushed out
+  rows.append((PUSH, 0, 0.14, 0.0, 0.05))
+  names.append('edge')
   start = reset(stack(layouts))
   end, info = step(start, actions(rows))
   return dict(start=start, end=end, info=info, index={n: i for i, n in enumerate(names)})
@@ -93,6 +96,15 @@ def test_push_moves_cube_about_10cm_along_direction(env, outcome):
     assert 0.07 <= along <= 0.13, f'rotation {k}: moved {along:.3f} m along the push'
     assert abs(across) < 0.03, f'rotation {k}: drifted {across:.3f} m sideways'
     assert bool(end.in_play[i, CUBE]) and not bool(outcome['info'].grasp_success[i])
+    assert int(outcome['info'].lost[i]) == 0
+
+
+def test_push_over_the_border_loses_the_cube(outcome):
+  """Lost: out of play, counted, named in the step's mask, not picked."""
+  info, end, i = outcome['info'], outcome['end'], outcome['index']['edge']
+  assert int(info.lost[i]) == 1 and int(end.lost[i]) == 1
+  assert np.asarray(info.left_workspace[i]).nonzero()[0].tolist() == [CUBE]
+  assert not bool(end.in_play[i, CUBE]) and int(end.picked[i]) == 0
 
 
 def test_unhealthy_env_is_detected_reset_and_counted(env, compiled, outcome):
