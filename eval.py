@@ -195,7 +195,8 @@ def main(argv=None) -> int:
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   config_lib.add_arguments(parser)
   parser.add_argument('--checkpoint', '--compare', nargs='+', default=[],
-                      help='work directories of train.py runs')
+                      help='work directories of train.py runs, or folders written by '
+                           'mvcoba_jax.export (e.g. pretrained/mvcoba)')
   parser.add_argument('--baseline', choices=('heuristic',),
                       help='a policy that needs no checkpoint')
   parser.add_argument('--tables', nargs='+', default=[], metavar='EVAL_DIR',

@@ -2,7 +2,8 @@
 
   python -m mvcoba_jax.export --checkpoint WORKDIR --out DIR
 
-WORKDIR is a `train.py` work directory (config.json, checkpoints/). DIR gets
+WORKDIR is a `train.py` work directory (config.json, checkpoints/). DIR gets the following; `load`
+reads it back (eval.py --checkpoint DIR), so a trained policy travels without its training state:
 - params.npz: the network parameters by flat name (`fcns/0/trunk/blocks/0/conv1/kernel`);
 - model.onnx: the Q-network forward for one state and all K rotations, rotations included;
 - model.json: names, shapes and dtypes of the parameters, the config, the heightmap frame, the
@@ -42,17 +43,22 @@ class ExportError(RuntimeError):
 
 
 def load(workdir) -> tuple[Config, networks.QNetwork, int]:
-  """(config from config.json, Q-network, step) of the latest checkpoint in `workdir`.
+  """(config, Q-network, step) of the latest checkpoint in a `train.py` work directory, or of
+  a folder that `export` wrote (model.json, params.npz: see `load_exported`).
 
-  The config is checked against the checkpoint's before the MJX scene is built, then the whole
-  training state is restored through `Checkpoints.restore`, the path of `train.py --resume`;
-  its structure comes from `jax.eval_shape`, which traces but compiles nothing.
+  For a work directory the config (config.json) is checked against the checkpoint's before the
+  MJX scene is built, then the whole training state is restored through `Checkpoints.restore`,
+  the path of `train.py --resume`; its structure comes from `jax.eval_shape`, which traces but
+  compiles nothing.
   """
   workdir = pathlib.Path(workdir)
+  if (workdir / 'model.json').is_file():
+    return load_exported(workdir)
   config_path = workdir / 'config.json'
   if not config_path.is_file():
     raise ExportError(f'{config_path} does not exist: --checkpoint takes the work directory of '
-                      'a train.py run (config.json, checkpoints/)')
+                      'a train.py run (config.json, checkpoints/) or a folder written by '
+                      'mvcoba_jax.export (model.json, params.npz)')
   if not (workdir / 'checkpoints').is_dir():  # Checkpoints() would create it
     raise ExportError(f'no checkpoints in {workdir / "checkpoints"}')
   try:
@@ -100,6 +106,48 @@ def flat_params(model: networks.QNetwork) -> dict[str, np.ndarray]:
 
   walk(nnx.to_pure_dict(nnx.state(model)), '')
   return out
+
+
+def load_exported(folder) -> tuple[Config, networks.QNetwork, int]:
+  """(config, Q-network, step) from what `export` wrote: a trained policy without its training
+  state (replay, optimiser), small enough to ship, as `pretrained/` does.
+
+  Every parameter must be in params.npz with the shape the network of model.json's config
+  expects; otherwise the error names the arrays that differ.
+  """
+  folder = pathlib.Path(folder)
+  model_path, params_path = folder / 'model.json', folder / 'params.npz'
+  try:
+    described = json.loads(model_path.read_text())
+    if described.get('format') != FORMAT:
+      raise ValueError(f'format {described.get("format")!r}, expected {FORMAT!r}')
+    config = config_lib.from_dict(described['config'], where=str(model_path))
+    step = int(described['source']['checkpoint_step'])
+    model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
+  except (OSError, ValueError, TypeError, KeyError, AttributeError) as e:
+    raise ExportError(f'{model_path}: not an export of mvcoba_jax ({e})') from None
+  want = {n: a.shape for n, a in flat_params(model).items()}
+  try:
+    with np.load(params_path) as saved:
+      got = {n: saved[n] for n in saved.files}
+  except (OSError, ValueError) as e:
+    raise ExportError(f'{params_path}: cannot read it ({e})') from None
+  problems = ([f'{n}: missing' for n in sorted(set(want) - set(got))]
+              + [f'{n}: not a parameter of this network' for n in sorted(set(got) - set(want))]
+              + [f'{n}: shape {got[n].shape}, the network needs {want[n]}'
+                 for n in sorted(set(want) & set(got)) if got[n].shape != want[n]])
+  if problems:
+    raise ExportError(f'{params_path} does not fit the {config.network.method} network of '
+                      f'{model_path}:\n  ' + '\n  '.join(problems[:10]))
+
+  def filled(tree, prefix):
+    return {k: filled(v, f'{prefix}{k}/') if isinstance(v, dict)
+            else jnp.asarray(got[f'{prefix}{k}']) for k, v in tree.items()}
+
+  state = nnx.state(model)
+  nnx.replace_by_pure_dict(state, filled(nnx.to_pure_dict(state), ''))
+  nnx.update(model, state)
+  return config, model, step
 
 
 def _enlarge_without_antialias():

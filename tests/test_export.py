@@ -176,6 +176,32 @@ def test_example_script_prints_the_jax_action_without_jax(run, exported, parity,
     assert got['primitive_name'] == ('grasp' if changed else 'push')
 
 
+def test_export_folder_loads_back_as_the_same_policy(run, exported, parity, states):
+  """What eval.py --checkpoint does with an exported folder: same config, step and Q maps."""
+  trainer, _, _ = run
+  config, model, step = export.load(exported[0]['params'].parent)
+  assert config == trainer.config and step == 8
+  c, d = states['rendered']
+  np.testing.assert_allclose(np.asarray(jax.jit(lambda c, d: model(c, d))(c, d)),
+                             parity['rendered'][0], atol=1e-6)
+
+
+def test_export_folder_of_another_network_is_a_clear_error(exported, tmp_path):
+  folder = tmp_path / 'other'
+  shutil.copytree(exported[0]['params'].parent, folder)
+  with np.load(folder / 'params.npz') as saved:
+    arrays = {n: saved[n] for n in saved.files}
+  first, last = sorted(arrays)[0], sorted(arrays)[-1]
+  arrays[first] = arrays[first][..., :1]
+  del arrays[last]
+  np.savez(folder / 'params.npz', **arrays)
+  with pytest.raises(export.ExportError, match='does not fit') as error:
+    export.load(folder)
+  message = str(error.value)
+  assert str(folder / 'params.npz') in message
+  assert f'{first}: shape' in message and f'{last}: missing' in message
+
+
 def test_missing_work_directory_is_a_clear_error(tmp_path):
   missing = tmp_path / 'nowhere'
   with pytest.raises(export.ExportError, match='nowhere'):
