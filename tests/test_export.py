@@ -202,6 +202,15 @@ def test_export_folder_of_another_network_is_a_clear_error(exported, tmp_path):
   assert f'{first}: shape' in message and f'{last}: missing' in message
 
 
+@pytest.mark.parametrize('folder', sorted((ROOT / 'pretrained').iterdir()), ids=lambda p: p.name)
+def test_shipped_pretrained_policy_fits_the_current_network(folder):
+  """A change of the network that would leave a shipped policy unloadable fails here: train and
+  export it again (README, Pretrained policy)."""
+  config, model, step = export.load(folder)
+  assert config.network.method == folder.name and step > 0
+  assert all(np.isfinite(a).all() for a in export.flat_params(model).values())
+
+
 def test_missing_work_directory_is_a_clear_error(tmp_path):
   missing = tmp_path / 'nowhere'
   with pytest.raises(export.ExportError, match='nowhere'):
