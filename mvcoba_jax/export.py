@@ -42,6 +42,17 @@ class ExportError(RuntimeError):
   """A work directory that cannot be exported; the message names the path or config keys."""
 
 
+def _config(saved: dict, path: pathlib.Path) -> Config:
+  """The config of a saved run's JSON; warns about fields it lacks, which take today's defaults."""
+  config = config_lib.from_dict(saved, where=str(path))
+  defaulted = config_lib.defaulted(saved, config)
+  if defaulted:  # e.g. a run from before scene.contact_timeconst trained with other physics
+    warnings.warn(f'{path} lacks fields added since it was written; they take the current '
+                  f'defaults: {", ".join(f"{k}={v!r}" for k, v in defaulted.items())} '
+                  '(add them to it if its run used other values)', stacklevel=3)
+  return config
+
+
 def load(workdir) -> tuple[Config, networks.QNetwork, int]:
   """(config, Q-network, step) of the latest checkpoint in a `train.py` work directory, or of
   a folder that `export` wrote (model.json, params.npz: see `load_exported`).
@@ -62,15 +73,9 @@ def load(workdir) -> tuple[Config, networks.QNetwork, int]:
   if not (workdir / 'checkpoints').is_dir():  # Checkpoints() would create it
     raise ExportError(f'no checkpoints in {workdir / "checkpoints"}')
   try:
-    saved = json.loads(config_path.read_text())
-    config = config_lib.from_dict(saved, where=str(config_path))
+    config = _config(json.loads(config_path.read_text()), config_path)
   except (ValueError, TypeError) as e:  # bad JSON or values that do not fit the fields
     raise ExportError(f'{config_path}: {e}') from None
-  defaulted = config_lib.defaulted(saved, config)
-  if defaulted:  # e.g. a run from before scene.contact_timeconst trained with other physics
-    warnings.warn(f'{config_path} lacks fields added since it was written; they take the current '
-                  f'defaults: {", ".join(f"{k}={v!r}" for k, v in defaulted.items())} '
-                  '(add them to it if its run used other values)', stacklevel=2)
   checkpoints = Checkpoints(workdir)
   step = checkpoints.latest()
   if step is None:
@@ -121,7 +126,7 @@ def load_exported(folder) -> tuple[Config, networks.QNetwork, int]:
     described = json.loads(model_path.read_text())
     if described.get('format') != FORMAT:
       raise ValueError(f'format {described.get("format")!r}, expected {FORMAT!r}')
-    config = config_lib.from_dict(described['config'], where=str(model_path))
+    config = _config(described['config'], model_path)
     step = int(described['source']['checkpoint_step'])
     model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
   except (OSError, ValueError, TypeError, KeyError, AttributeError) as e:
