@@ -10,7 +10,7 @@ import pytest
 import eval as eval_cli
 from envs.scenarios import case_to_layout, read_case, stack_layouts
 from envs.tabletop import Tabletop
-from mvcoba_jax import evaluation, metrics, viz
+from mvcoba_jax import evaluation, metrics, perception, viz
 from mvcoba_jax.config import resolve
 
 CASES = {
@@ -185,7 +185,7 @@ def test_losses_name_the_action_and_where_the_object_was():
   xyz[0, 1, 1] = (0.2, -0.05, 0.03)
   left = np.zeros((1, 3, 2), bool)
   left[0, 1, 1] = left[0, 2, 0] = True
-  r = int(round(2 * config.scene.workspace_half / config.perception.heightmap_resolution))
+  r = perception.grid_size(config)
   trace = evaluation.Trace(
       color=np.zeros((1, 3, 2, r, r, 3), np.uint8), object_xyz=xyz, left_workspace=left,
       primitive=steps(1, 0, 1), rotation=steps(0, 0, 0), row=steps(0, r // 2, 0),
