@@ -1,11 +1,13 @@
-"""Physics throughput: batched MJX primitives vs native MuJoCo on the same scene.
+"""Physics throughput of the two backends on the same scene, and of raw MuJoCo for reference.
 
-Prints one JSON object: for each object count and batch size, the compile times of `reset` and
-`step`, env-steps/s and primitives/s of `jax.vmap(env.step)` (a grasp at a random object, the
-full scripted primitive), and the same scene and control sequence stepped by native MuJoCo
-(`mj_step` in a loop, and `mujoco.rollout` on 2 threads) for comparison.
+Prints one JSON object: for each object count and batch size, env-steps/s and primitives/s of
+`jit(vmap(env.step))` (a grasp at an object, the full scripted primitive) on the native backend,
+the same on MJX (at the `--mjx-batch` sizes only: its programs take minutes to compile), and the
+same start states and control sequences stepped by raw `mujoco.rollout` and
+`mujoco.batch.Batch.rollout` outside JAX (what the native backend's JAX bridge costs), with the
+ratios measured in the same run.
 
-  python benchmarks/physics.py [--batch 1 8 32] [--objects 10 30] [--repeats 2]
+  python benchmarks/physics.py [--batch 1 8 32] [--mjx-batch 8] [--objects 10 30] [--repeats 3]
 """
 from __future__ import annotations
 
@@ -24,9 +26,12 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
+from mujoco import batch as mjbatch  # noqa: E402
 from mujoco import rollout  # noqa: E402
 
 from envs import primitives  # noqa: E402
+from envs.physics import resolve_backend  # noqa: E402
+from envs.native import default_threads  # noqa: E402
 from envs.primitives import Action  # noqa: E402
 from envs.tabletop import Tabletop  # noqa: E402
 from mvcoba_jax.config import resolve  # noqa: E402
@@ -38,22 +43,29 @@ POOLS = {  # object slots per scene size; every slot is in play
     30: (('cube', 5), ('tall_box', 4), ('flat_box', 4), ('prism', 4), ('arch', 4),
          ('cylinder', 3), ('disk', 3), ('octagon', 3)),
 }
-CONTACT_LIMITS = {10: (24, 96), 30: (48, 192)}  # max_geom_pairs, max_contact_points
+CONTACT_LIMITS = {10: (24, 96), 30: (48, 192)}  # MJX's max_geom_pairs, max_contact_points
 
 
-def make_env(n: int) -> Tabletop:
+def make_env(n: int, backend: str) -> Tabletop:
   base = resolve(None)
   pairs, points = CONTACT_LIMITS[n]
   scene = dataclasses.replace(base.scene, pool=POOLS[n], max_geom_pairs=pairs,
-                              max_contact_points=points)
+                              max_contact_points=points, backend=backend)
   return Tabletop(dataclasses.replace(base, scene=scene,
                                       env=dataclasses.replace(base.env, num_objects=n)))
 
 
-def timed(fn, *args):
+def timed(fn, *args, repeats: int):
+  """(output, first call s, median of `repeats` later calls s)."""
   t = time.perf_counter()
   out = jax.block_until_ready(fn(*args))
-  return out, time.perf_counter() - t
+  first = time.perf_counter() - t
+  runs = []
+  for _ in range(repeats):
+    t = time.perf_counter()
+    jax.block_until_ready(fn(*args))
+    runs.append(time.perf_counter() - t)
+  return out, first, float(np.median(runs))
 
 
 def grasp_actions(env: Tabletop, states) -> Action:
@@ -66,35 +78,72 @@ def grasp_actions(env: Tabletop, states) -> Action:
                 x=target[:, 0], y=target[:, 1], z=target[:, 2] + 0.02)
 
 
-def native(env: Tabletop, states, actions: Action, batch: int) -> dict:
-  """The same start states and gripper targets stepped by MuJoCo's C library."""
-  m = env.scene.mj_model
-  script = env.script
+def backend_row(env: Tabletop, states, actions, repeats: int) -> dict:
+  step = jax.jit(jax.vmap(env.step))
+  (_, info), first, wall = timed(step, states, actions, repeats=repeats)
+  b, steps = actions.x.shape[0], env.script.length
+  return {'step_compile_s': first - wall, 'primitive_wall_s': wall,
+          'env_steps_per_s': b * steps / wall, 'primitives_per_s': b / wall,
+          'grasp_success': float(np.mean(np.asarray(info.grasp_success))),
+          'healthy': float(np.mean(np.asarray(info.healthy)))}
+
+
+def raw_rows(env: Tabletop, states, actions: Action, repeats: int) -> dict:
+  """The same start states and controls stepped by MuJoCo directly, no JAX in between."""
+  m, script, b = env.scene.mj_model, env.script, actions.x.shape[0]
   ts = jnp.arange(script.length)
   ctrl = np.asarray(jax.vmap(lambda a: jax.vmap(
       lambda t: primitives.target(script, a, env.config.env, t))(ts))(actions), np.float64)
-  start_pose = np.asarray(jax.vmap(lambda a: primitives.start_pose(a, env.config.env))(actions))
-  qpos = np.asarray(states.data.qpos, np.float64)
-  qpos[:, env.scene.index.gripper_qpos] = start_pose
-  d = mujoco.MjData(m)
-  d.qpos[:] = qpos[0]
-  t = time.perf_counter()
-  for step in range(script.length):
-    d.ctrl[:] = ctrl[0, step]
-    mujoco.mj_step(m, d)
-  loop = script.length / (time.perf_counter() - t)
+  start = np.asarray(jax.vmap(lambda a: primitives.start_pose(a, env.config.env))(actions))
+  qpos = np.asarray(states.sim.qpos, np.float64)
+  qpos[:, env.scene.index.gripper_qpos] = start
+  threads = default_threads()
 
   spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-  init = np.zeros((batch, mujoco.mj_stateSize(m, spec)))
-  for b in range(batch):
-    d = mujoco.MjData(m)
-    d.qpos[:] = qpos[b]
-    mujoco.mj_getState(m, d, init[b], spec)
-  datas = [mujoco.MjData(m) for _ in range(2)]
-  t = time.perf_counter()
-  rollout.rollout(m, datas, init, ctrl)
-  threaded = batch * script.length / (time.perf_counter() - t)
-  return {'mj_step_loop_env_steps_per_s': loop, 'rollout_2_threads_env_steps_per_s': threaded}
+  init = np.zeros((b, mujoco.mj_stateSize(m, spec)))
+  d = mujoco.MjData(m)
+  for i in range(b):
+    d.qpos[:] = qpos[i]
+    mujoco.mj_getState(m, d, init[i], spec)
+  datas = [mujoco.MjData(m) for _ in range(threads)]
+
+  def with_rollout():
+    rollout.rollout(m, datas, init, ctrl)
+
+  batch = mjbatch.Batch(m, b, nthread=min(threads, b))
+
+  def with_batch():
+    batch.state[:] = 0.0
+    batch.qpos[:] = qpos
+    batch.rollout(script.length, ctrl, record=())
+
+  out = {}
+  for name, fn in (('rollout', with_rollout), ('batch', with_batch)):
+    fn()
+    runs = []
+    for _ in range(repeats):
+      t = time.perf_counter()
+      fn()
+      runs.append(time.perf_counter() - t)
+    out[f'raw_{name}_env_steps_per_s'] = b * script.length / float(np.median(runs))
+  return out
+
+
+def bench(n: int, batch: int, mjx: bool, repeats: int) -> dict:
+  native_env = make_env(n, 'native')
+  keys = jax.random.split(jax.random.PRNGKey(0), batch)
+  states = jax.jit(jax.vmap(native_env.reset))(keys)
+  actions = grasp_actions(native_env, states)
+  row = {'objects': n, 'batch': batch, 'physics_steps_per_primitive': native_env.script.length,
+         'native': backend_row(native_env, states, actions, repeats)}
+  row.update(raw_rows(native_env, states, actions, repeats))
+  nat = row['native']['env_steps_per_s']
+  row['native_over_raw_rollout'] = nat / row['raw_rollout_env_steps_per_s']
+  row['native_over_raw_batch'] = nat / row['raw_batch_env_steps_per_s']
+  if mjx:  # the same settled states, stepped by MJX
+    row['mjx'] = backend_row(make_env(n, 'mjx'), states, actions, repeats)
+    row['native_over_mjx'] = nat / row['mjx']['env_steps_per_s']
+  return row
 
 
 def settings() -> dict:
@@ -103,45 +152,20 @@ def settings() -> dict:
   return {
       'timestep': base.scene.timestep, 'solver': 'Newton', 'jacobian': 'sparse',
       'iterations': base.scene.iterations, 'ls_iterations': base.scene.ls_iterations,
-      'cone': 'pyramidal',
-      'native_note': 'native runs start from the same states and controls; parked objects '
-                     'are not pinned there (they fall far outside the workspace)',
+      'cone': 'pyramidal', 'backend': resolve_backend(base.scene),
+      'native_threads': default_threads(),
       'jax': jax.__version__, 'mujoco': mujoco.__version__, 'device': str(jax.devices()[0]),
       'cpu_count': os.cpu_count(), 'machine': platform.machine(),
   }
 
 
-def bench(n: int, batch: int, repeats: int) -> dict:
-  env = make_env(n)
-  keys = jax.random.split(jax.random.PRNGKey(0), batch)
-  reset = jax.jit(jax.vmap(env.reset))
-  step = jax.jit(jax.vmap(env.step))
-  states, reset_first = timed(reset, keys)
-  _, reset_again = timed(reset, keys)
-  actions = grasp_actions(env, states)
-  (_, info), step_first = timed(step, states, actions)
-  runs = [timed(step, states, actions)[1] for _ in range(repeats)]
-  step_time = float(np.median(runs))
-  steps = env.script.length
-  row = {
-      'objects': n, 'batch': batch, 'physics_steps_per_primitive': steps,
-      'reset_compile_s': reset_first - reset_again, 'step_compile_s': step_first - step_time,
-      'primitive_wall_s': step_time,
-      'env_steps_per_s': batch * steps / step_time,
-      'primitives_per_s': batch / step_time,
-      'grasp_success': float(np.mean(np.asarray(info.grasp_success))),
-      'healthy': float(np.mean(np.asarray(info.healthy))),
-  }
-  row.update(native(env, states, actions, batch))
-  row['native_loop_over_mjx'] = row['mj_step_loop_env_steps_per_s'] / row['env_steps_per_s']
-  return row
-
-
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--batch', type=int, nargs='+', default=[1, 8, 32])
+  parser.add_argument('--mjx-batch', type=int, nargs='*', default=[8],
+                      help='batch sizes at which MJX is measured too (none: native only)')
   parser.add_argument('--objects', type=int, nargs='+', default=[10, 30], choices=sorted(POOLS))
-  parser.add_argument('--repeats', type=int, default=2)
+  parser.add_argument('--repeats', type=int, default=3)
   parser.add_argument('--cache', action='store_true',
                       help='use the persistent compilation cache (compile times then mean little)')
   args = parser.parse_args()
@@ -150,18 +174,13 @@ def main():
   rows = []
   for n in args.objects:
     for b in args.batch:
-      rows.append(bench(n, b, args.repeats))
+      rows.append(bench(n, b, b in args.mjx_batch, args.repeats))
       print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
-  for n in args.objects:
-    one = [r for r in rows if r['objects'] == n and r['batch'] == min(args.batch)][0]
-    for r in rows:
-      if r['objects'] == n:
-        r['speedup_vs_smallest_batch'] = r['env_steps_per_s'] / one['env_steps_per_s']
   print(json.dumps({
       'benchmark': 'physics',
       'settings': {
-          **settings(), 'contact_limits': CONTACT_LIMITS, 'pools': POOLS,
-          'primitive': 'grasp at the first object in play, full script',
+          **settings(), 'contact_limits_mjx': CONTACT_LIMITS, 'pools': POOLS,
+          'primitive': 'grasp at the first object in play, full script, from settled drops',
           'persistent_compilation_cache': args.cache,
       },
       'results': rows,

@@ -1,11 +1,12 @@
-"""Training-step throughput and where its time goes: physics, rendering, network.
+"""Training-step throughput and where its time goes: physics, rendering, network; both backends.
 
-Prints one JSON object: for each batch size B, the compile time and the steady-state wall time
-of the jitted training iteration (actions/s, updates/s), and the time of its parts measured
-alone on the same states: the batched primitive (physics), render + heightmaps (rendering),
-the 16-rotation forward for acting plus one SGD update (network).
+Prints one JSON object: for each batch size B and physics backend (native at every B, MJX at the
+`--mjx-batch` sizes), the compile time and the steady-state wall time of the jitted training
+iteration (actions/s, updates/s), and the time of its parts measured alone on the same states:
+the batched primitive (physics), render + heightmaps (rendering), the 16-rotation forward for
+acting plus one SGD update (network).
 
-  python benchmarks/train.py [--config configs/default.py] [--batch 1 8 32] [--repeats 2]
+  python benchmarks/train.py [--config configs/default.py] [--batch 1 8 32] [--mjx-batch 8]
 """
 from __future__ import annotations
 
@@ -42,8 +43,9 @@ def timed(fn, *args, repeats=1):
   return out, first, float(np.median(runs)) if runs else float('nan')
 
 
-def bench(config, batch: int, repeats: int) -> dict:
-  config = dataclasses.replace(config, num_envs=batch)
+def bench(config, batch: int, backend: str, repeats: int) -> dict:
+  config = dataclasses.replace(config, num_envs=batch,
+                               scene=dataclasses.replace(config.scene, backend=backend))
   trainer = Trainer(config)
   state, init_first, _ = timed(jax.jit(trainer.init), jax.random.PRNGKey(0), repeats=0)
   args = (jnp.bool_(True), jnp.float32(-1.0))
@@ -58,7 +60,7 @@ def bench(config, batch: int, repeats: int) -> dict:
   _, _, rendering = timed(jax.jit(trainer.observe), state.env, repeats=repeats)
   _, _, update = timed(jax.jit(trainer.update), state, jax.random.PRNGKey(2), repeats=repeats)
   return {
-      'batch': batch, 'init_first_call_s': init_first,
+      'batch': batch, 'backend': backend, 'init_first_call_s': init_first,
       'iteration_compile_s': it_first - it_wall, 'iteration_wall_s': it_wall,
       'actions_per_s': batch * k / it_wall, 'updates_per_s': k / it_wall,
       'per_action_step_s': {'physics': physics, 'rendering': rendering,
@@ -70,18 +72,23 @@ def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--config', default=str(ROOT / 'configs' / 'default.py'))
   parser.add_argument('--batch', type=int, nargs='+', default=[1, 8, 32])
+  parser.add_argument('--mjx-batch', type=int, nargs='*', default=[8],
+                      help='batch sizes at which the MJX backend is measured too')
   parser.add_argument('--repeats', type=int, default=2)
   args = parser.parse_args()
   config = resolve(args.config)
   rows = []
   for b in args.batch:
-    rows.append(bench(config, b, args.repeats))
-    print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
+    for backend in ('native', 'mjx') if b in args.mjx_batch else ('native',):
+      rows.append(bench(config, b, backend, args.repeats))
+      print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
   for r in rows:
     parts = r['per_action_step_s']
     total = sum(parts.values())
     r['share_of_parts'] = {k: v / total for k, v in parts.items()}
-    r['actions_per_s_vs_smallest_batch'] = r['actions_per_s'] / rows[0]['actions_per_s']
+    same = [o for o in rows if o['batch'] == r['batch'] and o['backend'] == 'mjx']
+    if r['backend'] == 'native' and same:
+      r['actions_per_s_over_mjx'] = r['actions_per_s'] / same[0]['actions_per_s']
   print(json.dumps({'benchmark': 'train', 'config': args.config,
                     'settings': {'method': config.network.method,
                                  'steps_per_iteration': config.train.steps_per_iteration,

@@ -1,23 +1,19 @@
-"""Two (or more) pinhole RGB-D cameras rendered by ray casting with `mjx.ray`, inside jit.
+"""Two (or more) pinhole RGB-D cameras rendered by ray casting, inside jit.
 
-Each pixel's ray is cast against every geom (MJX has no acceleration structure), so the cost is
-rays x geoms; the gripper bodies are excluded so it never hides the scene. Colour comes from the
-hit geom: an object's colour lives in the environment state, so one compiled model serves any
+The physics backend casts the rays (`mj_ray` on CPU threads, or `mjx.ray` traced into the
+program); the gripper's geom group is left out so it never hides the scene. The cameras are fixed
+in the world, so every ray's origin and direction is computed once. Colour comes from the hit
+geom: an object's colour lives in the environment state, so one compiled model serves any
 colouring.
 """
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 import mujoco
 import numpy as np
 from flax import struct
-from mujoco import mjx
 
 from mvcoba_jax.config import CameraConfig
-
-GRIPPER_BODIES = ('gripper', 'finger_left', 'finger_right')
-
 
 @struct.dataclass
 class CameraImage:
@@ -46,26 +42,39 @@ def geom_colors(env, state) -> jnp.ndarray:
   return jnp.where((slot >= 0)[:, None], state.color[jnp.maximum(slot, 0)], base)
 
 
+def world_rays(mj_model: mujoco.MjModel, cams) -> tuple[np.ndarray, np.ndarray]:
+  """(P, 3) origins and unit directions in the world of every pixel of every camera, in order."""
+  data = mujoco.MjData(mj_model)
+  mujoco.mj_kinematics(mj_model, data)
+  mujoco.mj_camlight(mj_model, data)
+  origins, directions = [], []
+  for c, cam in enumerate(cams):
+    rays = pixel_rays(cam).reshape(-1, 3).astype(np.float64) @ data.cam_xmat[c].reshape(3, 3).T
+    directions.append(rays / np.linalg.norm(rays, axis=-1, keepdims=True))
+    origins.append(np.broadcast_to(data.cam_xpos[c], rays.shape))
+  return np.concatenate(origins), np.concatenate(directions)
+
+
 def render(env, state) -> tuple[CameraImage, ...]:
   """Every camera of the scene, for one environment (vmap over environments)."""
-  m = env.scene.mj_model
-  exclude = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, b) for b in GRIPPER_BODIES]
+  cams = env.config.scene.cameras
+  origins, directions = env.camera_rays
+  dist, geom = env.backend.cast(state.sim, origins, directions)
+  hit = dist >= 0
+  dist = jnp.where(hit, dist, 0.0)
   colors = geom_colors(env, state)
-  images = []
-  for c, cam in enumerate(env.config.scene.cameras):
-    rays = pixel_rays(cam)
-    rot = state.data.cam_xmat[c].reshape(3, 3)
-    origin = state.data.cam_xpos[c]
-    world = jnp.asarray(rays.reshape(-1, 3)) @ rot.T
-    dist, geom = jax.vmap(lambda v: mjx.ray(env.model, state.data, origin, v,
-                                            bodyexclude=exclude))(world)
-    hit = dist >= 0
-    dist = jnp.where(hit, dist, 0.0)
-    shape = rays.shape[:2]
+  images, start = [], 0
+  for cam in cams:
+    shape = (cam.height, cam.width)
+    sl = slice(start, start + cam.height * cam.width)
+    start = sl.stop
+    rays = pixel_rays(cam).reshape(-1, 3)
+    d, g, h = dist[sl], geom[sl], hit[sl]
     images.append(CameraImage(
-        depth=(dist * -rays[..., 2].reshape(-1)).reshape(shape),
-        rgb=jnp.where(hit[:, None], colors[jnp.maximum(geom, 0)], 0.0).reshape(shape + (3,)),
-        geom=jnp.where(hit, geom, -1).reshape(shape),
-        points=(origin + dist[:, None] * world).reshape(shape + (3,)),
-        hit=hit.reshape(shape)))
+        depth=(d * -rays[:, 2]).reshape(shape),
+        rgb=jnp.where(h[:, None], colors[jnp.maximum(g, 0)], 0.0).reshape(shape + (3,)),
+        geom=jnp.where(h, g, -1).reshape(shape),
+        points=(jnp.asarray(origins[sl], jnp.float32)
+                + d[:, None] * jnp.asarray(directions[sl], jnp.float32)).reshape(shape + (3,)),
+        hit=h.reshape(shape)))
   return tuple(images)

@@ -2,17 +2,16 @@
 
 Contact bits: objects (contype 1) touch everything whose conaffinity has bit 1: other objects,
 the table (contype 2), the fingers (4) and the palm (8). Fingers and palm never touch the table
-or each other; occluders touch nothing (they only block camera rays).
+or each other; occluders touch nothing (they only block camera rays). The gripper's geoms are in
+their own geom group, which the cameras leave out.
 """
 from __future__ import annotations
 
 import dataclasses
 import functools
 
-import jax
 import mujoco
 import numpy as np
-from mujoco import mjx
 
 from envs import shapes
 from mvcoba_jax.config import CameraConfig, SceneConfig
@@ -22,6 +21,7 @@ MAX_OPENING = 0.11  # gap between the open fingers
 PALM_HALF = (0.015, 0.075, 0.01)
 PARK_HEIGHT = 2.0  # objects out of play wait here, far above the cameras' view
 GRIPPER_PARK = (0.0, 0.0, 1.0)
+GRIPPER_GROUP = 3  # geom group of palm and fingers: the cameras leave it out
 
 
 def park_position(slot: int) -> tuple[float, float, float]:
@@ -114,18 +114,18 @@ def build_mjcf(scene: SceneConfig) -> str:
       <joint name="grip_z" type="slide" axis="0 0 1" armature="0.1"/>
       <joint name="grip_yaw" type="hinge" axis="0 0 1" armature="0.01"/>
       <geom name="palm" type="box" pos="0 0 {2 * fz + PALM_HALF[2]:.6g}" size="{_fmt(PALM_HALF)}"
-            contype="8" mass="0.4"/>
+            contype="8" mass="0.4" group="{GRIPPER_GROUP}"/>
       <body name="finger_left" gravcomp="1">
         <joint name="finger_left" type="slide" axis="0 1 0" range="0 {MAX_OPENING / 2:.6g}"
                armature="0.01"/>
         <geom name="finger_left" type="box" pos="0 {fy:.6g} {fz:.6g}" size="{fx} {fy} {fz}"
-              contype="4" mass="0.05" friction="{finger_friction}"/>
+              contype="4" mass="0.05" friction="{finger_friction}" group="{GRIPPER_GROUP}"/>
       </body>
       <body name="finger_right" gravcomp="1">
         <joint name="finger_right" type="slide" axis="0 -1 0" range="0 {MAX_OPENING / 2:.6g}"
                armature="0.01"/>
         <geom name="finger_right" type="box" pos="0 {-fy:.6g} {fz:.6g}" size="{fx} {fy} {fz}"
-              contype="4" mass="0.05" friction="{finger_friction}"/>
+              contype="4" mass="0.05" friction="{finger_friction}" group="{GRIPPER_GROUP}"/>
       </body>
     </body>
 {chr(10).join(bodies)}
@@ -159,7 +159,6 @@ class SceneIndex:
 @dataclasses.dataclass(frozen=True)
 class Scene:
   mj_model: mujoco.MjModel
-  model: mjx.Model
   index: SceneIndex
   config: SceneConfig
 
@@ -191,10 +190,8 @@ def _index(m: mujoco.MjModel, scene: SceneConfig) -> SceneIndex:
 
 @functools.lru_cache(maxsize=8)
 def build_scene(scene: SceneConfig) -> Scene:
-  """Compiled MuJoCo model, its MJX counterpart and the address index (cached per config)."""
+  """Compiled MuJoCo model and the address index (cached per config)."""
   if scene.num_slots == 0:
     raise ValueError('scene.pool holds no object slots')
   mj_model = mujoco.MjModel.from_xml_string(build_mjcf(scene))
-  # This process's own device: jax.devices()[0], MJX's default, may belong to another process.
-  model = mjx.put_model(mj_model, device=jax.local_devices()[0], impl='jax')
-  return Scene(mj_model=mj_model, model=model, index=_index(mj_model, scene), config=scene)
+  return Scene(mj_model=mj_model, index=_index(mj_model, scene), config=scene)

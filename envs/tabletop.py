@@ -1,20 +1,20 @@
 """The batched tabletop environment: pure `reset`, `reset_from_case` and `step` over a pytree state.
 
 Every function here works on one environment and is jittable; vmap it over B environments
-(`jax.vmap(env.step)`). Object slots not in play are pinned at their parking spots on every physics
-step, so they never touch anything and never count.
+(`jax.vmap(env.step)`). The physics runs in the backend `scene.backend` picks (`envs/physics.py`:
+native MuJoCo on a CPU, MJX on an accelerator); nothing here depends on which. Object slots not
+in play wait at their parking spots, so they never touch anything and never count.
 """
 from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 from flax import struct
-from mujoco import mjx
 
-from envs import primitives, shapes
+from envs import cameras, physics, primitives, shapes
+from envs.physics import SimState
 from envs.primitives import Action
-from envs.scene import GRIPPER_PARK, build_scene, park_position
+from envs.scene import GRIPPER_PARK, build_scene
 from mvcoba_jax.config import Config
 from mvcoba_jax.geometry import quat_mul, yaw_quat
 
@@ -35,7 +35,7 @@ class Layout:
 
 @struct.dataclass
 class EnvState:
-  data: mjx.Data
+  sim: SimState
   in_play: jnp.ndarray  # (M,) bool: on the table and not yet picked or lost
   color: jnp.ndarray  # (M, 3)
   picked: jnp.ndarray  # int32: objects picked this episode
@@ -66,19 +66,19 @@ class Tabletop:
   def __init__(self, config: Config):
     self.config = config
     self.scene = build_scene(config.scene)
-    self.model = self.scene.model
+    self.backend = physics.make_backend(self.scene)
+    self._parking = physics.Parking(self.scene)
+    self.camera_rays = cameras.world_rays(self.scene.mj_model, config.scene.cameras)
     idx = self.scene.index
     self.num_slots = len(idx.slot_shapes)
     if config.env.num_objects > self.num_slots:
       raise ValueError(f'env.num_objects={config.env.num_objects} exceeds the '
                        f'{self.num_slots} object slots of scene.pool')
     self.script = primitives.make_script(config.env, config.scene.timestep)
-    self._qpos_idx = jnp.asarray(idx.slot_qpos[:, None] + np.arange(7))
-    self._qvel_idx = jnp.asarray(idx.slot_qvel[:, None] + np.arange(6))
+    self._qpos_idx = self._parking.qpos_idx
     self._grip_qpos = jnp.asarray(idx.gripper_qpos)
     self._grip_qvel = jnp.asarray(idx.gripper_qvel)
-    park = np.array([park_position(i) + (1.0, 0.0, 0.0, 0.0) for i in range(self.num_slots)])
-    self._park_qpos = jnp.asarray(park, jnp.float32)
+    self._park_qpos = self._parking.park_qpos
     self._gripper_park = jnp.array(GRIPPER_PARK + (0.0, primitives.FINGER_OPEN,
                                                    primitives.FINGER_OPEN), jnp.float32)
     slot_shapes = [shapes.SHAPES[s] for s in idx.slot_shapes]
@@ -89,40 +89,28 @@ class Tabletop:
                                jnp.float32)
 
   # ----------------------------------------------------------------------------- physics core
-  def _pin(self, data: mjx.Data, in_play) -> mjx.Data:
-    """Holds out-of-play slots at their parking spots, at rest."""
-    qpos = data.qpos.at[self._qpos_idx].set(
-        jnp.where(in_play[:, None], data.qpos[self._qpos_idx], self._park_qpos))
-    qvel = data.qvel.at[self._qvel_idx].set(
-        jnp.where(in_play[:, None], data.qvel[self._qvel_idx], 0.0))
-    return data.replace(qpos=qpos, qvel=qvel)
+  def _place_gripper(self, sim: SimState, pose) -> SimState:
+    """Puts the gripper at `pose` (x, y, z, yaw, fingers), at rest."""
+    return sim.replace(qpos=sim.qpos.at[self._grip_qpos].set(pose),
+                       qvel=sim.qvel.at[self._grip_qvel].set(0.0))
 
-  def _place_gripper(self, data: mjx.Data, pose) -> mjx.Data:
-    """Puts the gripper at `pose` (x, y, z, yaw, fingers) at rest, with targets there too."""
-    return data.replace(qpos=data.qpos.at[self._grip_qpos].set(pose),
-                        qvel=data.qvel.at[self._grip_qvel].set(0.0),
-                        ctrl=pose)
+  def _simulate(self, sim: SimState, in_play, ctrl) -> tuple[SimState, jnp.ndarray]:
+    """Steps through the actuator targets `ctrl` (T, 6); also whether the physics stayed sound."""
+    sim, ok = self.backend.simulate(sim, ~in_play, ctrl)
+    return sim, ok & self._health(sim)
 
-  def _simulate(self, data: mjx.Data, in_play, ctrl_fn, num_steps: int) -> mjx.Data:
-    def body(d, t):
-      d = mjx.step(self.model, d.replace(ctrl=ctrl_fn(t)))
-      return self._pin(d, in_play), None
-    data, _ = jax.lax.scan(body, data, jnp.arange(num_steps))
-    return data
+  def _health(self, sim: SimState):
+    finite = jnp.all(jnp.isfinite(sim.qpos)) & jnp.all(jnp.isfinite(sim.qvel))
+    return finite & (jnp.max(jnp.abs(sim.qvel)) < self.config.env.max_qvel)
 
-  def _health(self, data: mjx.Data):
-    finite = jnp.all(jnp.isfinite(data.qpos)) & jnp.all(jnp.isfinite(data.qvel))
-    return finite & (jnp.max(jnp.abs(data.qvel)) < self.config.env.max_qvel)
-
-  def _in_workspace(self, data: mjx.Data):
-    pos = data.qpos[self._qpos_idx[:, :3]]
+  def _in_workspace(self, sim: SimState):
+    pos = sim.qpos[self._qpos_idx[:, :3]]
     h = self.config.scene.workspace_half
     return (jnp.abs(pos[:, 0]) <= h) & (jnp.abs(pos[:, 1]) <= h) & (pos[:, 2] > -0.05)
 
-  def _finish(self, data: mjx.Data, in_play) -> mjx.Data:
-    """Parks the gripper and removed objects; refreshes positions for rendering."""
-    data = self._pin(self._place_gripper(data, self._gripper_park), in_play)
-    return mjx.camlight(self.model, mjx.kinematics(self.model, data))
+  def _finish(self, sim: SimState, in_play) -> SimState:
+    """Parks the gripper and the objects out of play."""
+    return self._parking.pin(self._place_gripper(sim, self._gripper_park), ~in_play)
 
   # ----------------------------------------------------------------------------- reset
   def sample_layout(self, key) -> Layout:
@@ -165,10 +153,8 @@ class Tabletop:
 
   def parked_occluders(self):
     """Poses of the occluder slots when a layout uses none of them: at their model positions."""
-    mj = self.scene.mj_model
-    bodies = np.flatnonzero(mj.body_mocapid >= 0)[np.argsort(mj.body_mocapid[mj.body_mocapid >= 0])]
-    return jnp.asarray(mj.body_pos[bodies], jnp.float32), jnp.asarray(mj.body_quat[bodies],
-                                                                        jnp.float32)
+    sim, mocap = physics.initial_state(self.scene), self.scene.index.occluder_mocap
+    return sim.mocap_pos[mocap], sim.mocap_quat[mocap]
 
   def reset(self, key) -> EnvState:
     """Drops `env.num_objects` random objects and lets them settle."""
@@ -179,48 +165,45 @@ class Tabletop:
     """The objects of `layout` exactly where it puts them, without physics (for pictures)."""
     if key is None:
       key = jax.random.PRNGKey(0)
-    data = mjx.make_data(self.model, device=jax.local_devices()[0])
-    qpos = data.qpos.at[self._qpos_idx].set(
+    sim = physics.initial_state(self.scene)
+    qpos = sim.qpos.at[self._qpos_idx].set(
         jnp.where(layout.in_play[:, None], jnp.concatenate([layout.pos, layout.quat], 1),
                   self._park_qpos))
     mocap = self.scene.index.occluder_mocap
-    data = data.replace(qpos=qpos,
-                        mocap_pos=data.mocap_pos.at[mocap].set(layout.occluder_pos),
-                        mocap_quat=data.mocap_quat.at[mocap].set(layout.occluder_quat))
-    return EnvState(data=self._finish(data, layout.in_play), in_play=layout.in_play,
+    sim = sim.replace(qpos=qpos, mocap_pos=sim.mocap_pos.at[mocap].set(layout.occluder_pos),
+                      mocap_quat=sim.mocap_quat.at[mocap].set(layout.occluder_quat))
+    return EnvState(sim=self._finish(sim, layout.in_play), in_play=layout.in_play,
                     color=layout.color, picked=jnp.int32(0), lost=jnp.int32(0),
-                    healthy=self._health(data), health_resets=jnp.int32(0), key=key)
+                    healthy=self._health(sim), health_resets=jnp.int32(0), key=key)
 
   def reset_from_case(self, layout: Layout, key=None) -> EnvState:
     """Places the objects of `layout` (a test case or a random drop) and lets them settle."""
     state = self.place(layout, key)
-    park = self._gripper_park
-    data = self._simulate(state.data, state.in_play, lambda t: park, self.config.env.settle_steps)
-    in_play = state.in_play & self._in_workspace(data)
-    return state.replace(data=self._finish(data, in_play), in_play=in_play,
-                         healthy=self._health(data))
+    hold = jnp.broadcast_to(self._gripper_park, (self.config.env.settle_steps, 6))
+    sim, healthy = self._simulate(state.sim, state.in_play, hold)
+    in_play = state.in_play & self._in_workspace(sim)
+    return state.replace(sim=self._finish(sim, in_play), in_play=in_play, healthy=healthy)
 
   # ----------------------------------------------------------------------------- step
   def step(self, state: EnvState, action: Action) -> tuple[EnvState, StepInfo]:
     """Executes one primitive and does the bookkeeping of picked and lost objects."""
     env = self.config.env
-    data = self._place_gripper(state.data, primitives.start_pose(action, env))
-    z_before = data.qpos[self._qpos_idx[:, 2]]
-    script = self.script
-    data = self._simulate(data, state.in_play,
-                          lambda t: primitives.target(script, action, env, t), script.length)
+    sim = self._place_gripper(state.sim, primitives.start_pose(action, env))
+    z_before = sim.qpos[self._qpos_idx[:, 2]]
+    ctrl = jax.vmap(lambda t: primitives.target(self.script, action, env, t))(
+        jnp.arange(self.script.length))
+    sim, healthy = self._simulate(sim, state.in_play, ctrl)
 
-    z_after = data.qpos[self._qpos_idx[:, 2]]
-    fingers = data.qpos[self._grip_qpos[4:]]
+    z_after = sim.qpos[self._qpos_idx[:, 2]]
+    fingers = sim.qpos[self._grip_qpos[4:]]
     holding = jnp.sum(fingers) > 0.003  # fingers stopped on something: not closed fully
     risen = state.in_play & (z_after - z_before > 0.5 * env.lift_height)
     picked = risen & holding & (action.primitive == primitives.GRASP)
-    lost = state.in_play & ~picked & ~self._in_workspace(data)
+    lost = state.in_play & ~picked & ~self._in_workspace(sim)
     in_play = state.in_play & ~picked & ~lost
-    healthy = self._health(data)
     info = StepInfo(grasp_success=jnp.any(picked), picked=jnp.sum(picked, dtype=jnp.int32),
                     lost=jnp.sum(lost, dtype=jnp.int32), left_workspace=lost, healthy=healthy)
-    state = state.replace(data=self._finish(data, in_play), in_play=in_play,
+    state = state.replace(sim=self._finish(sim, in_play), in_play=in_play,
                           picked=state.picked + info.picked, lost=state.lost + info.lost,
                           healthy=healthy)
     return state, info
@@ -228,4 +211,4 @@ class Tabletop:
   # ----------------------------------------------------------------------------- queries
   def object_positions(self, state: EnvState):
     """(M, 3) centre of every slot of one environment (parked slots report their parking spot)."""
-    return state.data.qpos[self._qpos_idx[:, :3]]
+    return state.sim.qpos[self._qpos_idx[:, :3]]

@@ -24,7 +24,11 @@ class CameraConfig:
 
 @dataclasses.dataclass(frozen=True)
 class SceneConfig:
-  """What goes into the compiled MuJoCo model."""
+  """What goes into the compiled MuJoCo model, and which engine steps it."""
+  # 'native': MuJoCo's C engine and mj_ray on CPU threads; 'mjx': MJX, traced into the jitted
+  # program (the path for GPUs and TPUs); 'auto': native when JAX's default device is a CPU.
+  backend: str = 'auto'
+  native_threads: int = 0  # threads of the native backend; 0: every core this process may use
   # Object slots: (shape name, count). Objects not in play are parked away from the table.
   # The default holds every public VPG test case and leaves a choice for random drops.
   pool: tuple[tuple[str, int], ...] = (
@@ -42,6 +46,7 @@ class SceneConfig:
   friction: float = 1.0
   finger_friction: float = 1.5
   object_density: float = 500.0
+  # MJX only (native MuJoCo has no caps): pairs and contact points kept per step.
   max_geom_pairs: int = 24
   max_contact_points: int = 96
   # Opposite sides of the workspace; at 160 x 160 pixels each sees ~97% of a 112 x 112 grid.
@@ -234,6 +239,11 @@ def from_dict(data: dict, cls=Config, where: str = 'config'):
   return cls(**{k: _value(v, hints[k], f'{where}.{k}') for k, v in data.items()})
 
 
+# Fields that choose where a run computes, not what it computes: a saved config that lacks them
+# (written before they existed) runs on this machine's choice without a warning.
+RUNTIME_FIELDS = ('scene.backend', 'scene.native_threads')
+
+
 def defaulted(data: dict, config, prefix: str = '') -> dict:
   """{dotted name: value} of the fields of `config` (= `from_dict(data)`) that `data` lacks and
   that took their defaults: fields added after `data` was written, maybe not what its run used."""
@@ -241,7 +251,8 @@ def defaulted(data: dict, config, prefix: str = '') -> dict:
   for f in dataclasses.fields(config):
     value = getattr(config, f.name)
     if f.name not in data:
-      found[prefix + f.name] = value
+      if prefix + f.name not in RUNTIME_FIELDS:
+        found[prefix + f.name] = value
     elif dataclasses.is_dataclass(value):
       found.update(defaulted(data[f.name], value, f'{prefix}{f.name}.'))
   return found

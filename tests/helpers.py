@@ -6,7 +6,18 @@ import numpy as np
 from envs import shapes
 from envs.primitives import Action
 from envs.scene import park_position
-from envs.tabletop import Layout
+from envs.tabletop import Layout, Tabletop
+from mvcoba_jax.config import override, resolve
+
+BACKENDS = ('native', 'mjx')  # physics tests run on both; the rest on the default (auto)
+
+
+def make_env(preset: str, backend: str = 'auto', *overrides: str) -> Tabletop:
+  """The environment of `preset` on `backend`, with `key=value` overrides."""
+  config = override(resolve(preset), f'scene.backend={backend}')
+  for assignment in overrides:
+    config = override(config, assignment)
+  return Tabletop(config)
 
 
 def layout(env, objects):

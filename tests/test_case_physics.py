@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 
 from envs.scenarios import case_to_layout, read_case, stack_layouts
-from envs.tabletop import Tabletop
-from mvcoba_jax.config import resolve
+from tests.helpers import BACKENDS, make_env
 from tests.penetration import max_penetration
 from tests.test_scenarios import VPG_CASES
 
@@ -18,9 +17,9 @@ OWN_CASE = """\
 """
 
 
-@pytest.fixture(scope='module')
-def settled(tmp_path_factory):
-  env = Tabletop(resolve('configs/default.py'))
+@pytest.fixture(scope='module', params=BACKENDS)
+def settled(request, tmp_path_factory):
+  env = make_env('configs/default.py', request.param)
   own = tmp_path_factory.mktemp('cases') / 'own-case.txt'
   own.write_text(OWN_CASE)
   paths = [own] + (sorted(VPG_CASES.glob('test-10-obj-*.txt')) if VPG_CASES.is_dir() else [])
@@ -51,5 +50,5 @@ def test_case_settles_in_place_without_interpenetration(settled, case_index):
   listed = np.asarray(layout.pos)[used, :2]
   drift = np.linalg.norm(pos[used, :2] - listed, axis=1)
   assert drift.max() < 0.01, f'{case.name}: drift per object {np.round(drift, 4)}'
-  assert max_penetration(env, states.data.qpos[case_index]) < 0.002
+  assert max_penetration(env, states.sim.qpos[case_index]) < 0.002
   assert bool(states.healthy[case_index])

@@ -1,4 +1,4 @@
-"""Grasp and push on the real MJX physics of the tiny scene (two cubes, two flat boxes).
+"""Grasp and push on the real physics of the tiny scene (two cubes, two flat boxes), both backends.
 
 All cases run as one batch through one compiled `step`, as training does.
 """
@@ -9,10 +9,8 @@ import pytest
 
 from envs import reserve as reserve_lib
 from envs.primitives import GRASP, PUSH
-from envs.tabletop import Tabletop
-from mvcoba_jax.config import resolve
 from mvcoba_jax.geometry import rotation_angle
-from tests.helpers import actions, layout, stack
+from tests.helpers import BACKENDS, actions, layout, make_env, stack
 
 CUBE, CUBE2, FLAT, FLAT2 = 0, 1, 2, 3
 YAWS = list(range(16))
@@ -20,9 +18,9 @@ PUSH_ROTATIONS = list(range(0, 16, 2))
 CUBE_AT = (0.03, -0.02)
 
 
-@pytest.fixture(scope='module')
-def env():
-  return Tabletop(resolve('configs/tiny.py'))
+@pytest.fixture(scope='module', params=BACKENDS)
+def env(request):
+  return make_env('configs/tiny.py', request.param)
 
 
 @pytest.fixture(scope='module')
@@ -108,25 +106,26 @@ def test_push_over_the_border_loses_the_cube(outcome):
 
 
 def test_unhealthy_env_is_detected_reset_and_counted(env, compiled, outcome):
-  """Training's path: a step flags the environment, the reserve swaps in a fresh one, counted."""
+  """Training's path: a step flags the environments whose physics broke (a NaN velocity, a NaN
+  control), the reserve swaps in fresh ones, counted; the others carry on untouched."""
   _, step = compiled
   start = outcome['start']
   b = start.in_play.shape[0]
-  bad = start.replace(data=start.data.replace(
-      qvel=start.data.qvel.at[0, 7].set(jnp.nan)))
+  bad = start.replace(sim=start.sim.replace(qvel=start.sim.qvel.at[0, 7].set(jnp.nan)))
   rows = [(GRASP, 0, 0.1, 0.1, 0.0)] * b
+  rows[1] = (GRASP, 0, np.nan, 0.1, 0.0)
   after, info = step(bad, actions(rows))
   healthy = np.asarray(info.healthy)
-  assert not healthy[0] and healthy[1:].all()
+  assert not healthy[:2].any() and healthy[2:].all()
   # The reserve: the outcome's own start states (settled drops) stand in for fresh ones.
   spare = reserve_lib.Reserve(states=jax.tree.map(lambda x: jnp.concatenate([x, x]), start),
                               available=jnp.int32(2 * b))
   swap = jax.jit(lambda s, r, m: reserve_lib.swap_in(jax.vmap(env.reset), r, s, m,
                                                      jax.random.PRNGKey(0)))
   healed, spare = swap(after, spare, ~info.healthy)
-  assert np.asarray(healed.healthy).all() and int(spare.available) == 2 * b - 1
-  assert np.asarray(healed.health_resets).tolist() == [1] + [0] * (b - 1)
-  assert np.isfinite(np.asarray(healed.data.qpos[0])).all()
-  np.testing.assert_array_equal(np.asarray(healed.data.qpos[0]),
-                                np.asarray(start.data.qpos[b - 1]))  # the reserve's top
-  np.testing.assert_array_equal(np.asarray(healed.data.qpos[1:]), np.asarray(after.data.qpos[1:]))
+  assert np.asarray(healed.healthy).all() and int(spare.available) == 2 * b - 2
+  assert np.asarray(healed.health_resets).tolist() == [1, 1] + [0] * (b - 2)
+  assert np.isfinite(np.asarray(healed.sim.qpos[:2])).all()
+  np.testing.assert_array_equal(np.asarray(healed.sim.qpos[:2]),  # the reserve's top two
+                                np.asarray(start.sim.qpos)[[b - 1, b - 2]])
+  np.testing.assert_array_equal(np.asarray(healed.sim.qpos[2:]), np.asarray(after.sim.qpos[2:]))

@@ -3,14 +3,13 @@ import jax
 import numpy as np
 import pytest
 
-from envs.tabletop import Tabletop
-from mvcoba_jax.config import resolve
+from tests.helpers import BACKENDS, make_env
 from tests.penetration import max_penetration
 
 
-@pytest.fixture(scope='module')
-def env():
-  return Tabletop(resolve('configs/default.py'))
+@pytest.fixture(scope='module', params=BACKENDS)
+def env(request):
+  return make_env('configs/default.py', request.param)
 
 
 @pytest.fixture(scope='module')
@@ -21,7 +20,7 @@ def states(env):
 
 
 def test_same_key_same_state_different_keys_different_layouts(env, states):
-  qpos = np.asarray(states.data.qpos)
+  qpos = np.asarray(states.sim.qpos)
   np.testing.assert_array_equal(qpos[0], qpos[1])
   pos = np.asarray(jax.vmap(env.object_positions)(states))
   for other in (2, 3):
@@ -40,10 +39,10 @@ def test_drop_settles_all_objects_inside_the_workspace(env, states):
   assert (pos[in_play][:, 2] > 0.0).all() and (pos[in_play][:, 2] < 0.2).all()
   assert np.asarray(states.healthy).all()
   # Settled: nothing moves faster than 5 cm/s.
-  qvel = np.asarray(states.data.qvel)
+  qvel = np.asarray(states.sim.qvel)
   assert np.abs(qvel[:, 6:]).max() < 0.05
 
 
 def test_no_interpenetration_after_settling(env, states):
   for b in range(states.in_play.shape[0]):
-    assert max_penetration(env, states.data.qpos[b]) < 0.002
+    assert max_penetration(env, states.sim.qpos[b]) < 0.002
