@@ -1,2 +1,2 @@
-"""mvcoba-jax: batched MJX push-and-grasp learning in clutter and occlusion (MV-COBA)."""
+"""mvcoba-jax: batched MuJoCo push-and-grasp learning in clutter and occlusion (MV-COBA)."""
 __version__ = '0.1.0'

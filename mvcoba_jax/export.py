@@ -58,7 +58,7 @@ def load(workdir) -> tuple[Config, networks.QNetwork, int]:
   a folder that `export` wrote (model.json, params.npz: see `load_exported`).
 
   For a work directory the config (config.json) is checked against the checkpoint's before the
-  MJX scene is built, then the whole training state is restored through `Checkpoints.restore`,
+  scene is built, then the whole training state is restored through `Checkpoints.restore`,
   the path of `train.py --resume`; its structure comes from `jax.eval_shape`, which traces but
   compiles nothing.
   """

@@ -137,10 +137,13 @@ class Trainer:
     per = networks.huber_loss(pred, jax.lax.stop_gradient(y), t.huber_delta)
     return jnp.sum(per * valid.astype(jnp.float32)), pred - y
 
-  def update(self, state: TrainState, key) -> tuple[TrainState, jnp.ndarray]:
+  def update(self, state: TrainState, key, enabled=True) -> tuple[TrainState, jnp.ndarray]:
     """One SGD step on a prioritised batch; a non-finite loss or parameter leaves all as it was.
 
-    Returns the state and the loss per transition (0 when the step was refused).
+    Without `enabled` the step is computed and discarded: selecting its result costs far less on
+    a CPU than branching around it, since XLA runs a network inside `lax.cond` several times
+    slower (benchmarks/train.py). Returns the state and the loss per transition (0 when the step
+    was refused or not enabled).
     """
     t = self.config.train
     index, batch, valid = replay_lib.sample(state.replay, key, t.batch_size, t.priority_exponent)
@@ -148,17 +151,18 @@ class Trainer:
         state.params, state.target_params, batch, valid)
     updates, opt_state = self.optimizer.update(grads, state.opt_state, state.params)
     params = optax.apply_updates(state.params, updates)
-    ok = jnp.isfinite(loss) & _all_finite(params)
+    sound = jnp.isfinite(loss) & _all_finite(params)
+    ok = enabled & sound
     keep = lambda new, old: jax.tree.map(lambda a, b: jnp.where(ok, a, b), new, old)
     params, opt_state = keep(params, state.params), keep(opt_state, state.opt_state)
     count = state.updates + ok.astype(jnp.int32)
     copy = ok & (count % t.target_update_period == 0)
     target = jax.tree.map(lambda a, b: jnp.where(copy, a, b), params, state.target_params)
-    replay = jax.lax.cond(ok, lambda r: replay_lib.update_priorities(r, index, td),
-                          lambda r: r, state.replay)
+    priority = replay_lib.update_priorities(state.replay, index, td).priority
+    replay = state.replay.replace(priority=jnp.where(ok, priority, state.replay.priority))
+    skipped = state.skipped_updates + (enabled & ~sound).astype(jnp.int32)
     state = state.replace(params=params, target_params=target, opt_state=opt_state,
-                          replay=replay, updates=count,
-                          skipped_updates=state.skipped_updates + (~ok).astype(jnp.int32))
+                          replay=replay, updates=count, skipped_updates=skipped)
     mean_loss = loss / jnp.maximum(jnp.sum(valid), 1)  # logged per transition, for any batch
     return state, jnp.where(ok, mean_loss, 0.0)
 
@@ -203,8 +207,7 @@ class Trainer:
     replay = jax.lax.cond(learn, lambda r: replay_lib.add(r, transition), lambda r: r,
                           state.replay)
     state = state.replace(replay=replay)
-    state, loss = jax.lax.cond(learn & (replay.size > 0), self.update,
-                               lambda s, k: (s, jnp.float32(0.0)), state, k_learn)
+    state, loss = self.update(state, k_learn, learn & (replay.size > 0))
 
     b = done.shape[0]
     state = state.replace(
