@@ -131,8 +131,9 @@ def main(argv=None) -> int:
   per_iteration = config.num_envs * config.train.steps_per_iteration
 
   print(f'{config.network.method}: {config.num_envs} tabletops x '
-        f'{config.train.steps_per_iteration} actions per compiled call; compiling '
-        '(several minutes on a CPU the first time, cached after)...', flush=True)
+        f'{config.train.steps_per_iteration} actions per compiled call on the '
+        f'{trainer.env.backend.name} backend; compiling (cached after the first time)...',
+        flush=True)
   state = jax.jit(trainer.init)(jax.random.PRNGKey(config.seed))
   actions_path, metrics_path = workdir / 'actions.jsonl', workdir / 'metrics.jsonl'
   if args.resume:

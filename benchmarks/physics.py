@@ -56,7 +56,7 @@ def make_env(n: int, backend: str) -> Tabletop:
 
 
 def timed(fn, *args, repeats: int):
-  """(output, first call s, median of `repeats` later calls s)."""
+  """(output, first call s, median of `repeats` later calls s, nan without any)."""
   t = time.perf_counter()
   out = jax.block_until_ready(fn(*args))
   first = time.perf_counter() - t
@@ -65,7 +65,7 @@ def timed(fn, *args, repeats: int):
     t = time.perf_counter()
     jax.block_until_ready(fn(*args))
     runs.append(time.perf_counter() - t)
-  return out, first, float(np.median(runs))
+  return out, first, float(np.median(runs)) if runs else float('nan')
 
 
 def grasp_actions(env: Tabletop, states) -> Action:

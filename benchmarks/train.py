@@ -16,31 +16,18 @@ import json
 import os
 import pathlib
 import sys
-import time
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / 'benchmarks'))
 
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
-import numpy as np  # noqa: E402
 
 from mvcoba_jax import agent  # noqa: E402
 from mvcoba_jax.config import resolve  # noqa: E402
 from mvcoba_jax.training import Trainer  # noqa: E402
-
-
-def timed(fn, *args, repeats=1):
-  """(output, first call s, median later call s)."""
-  t = time.perf_counter()
-  out = jax.block_until_ready(fn(*args))
-  first = time.perf_counter() - t
-  runs = []
-  for _ in range(repeats):
-    t = time.perf_counter()
-    jax.block_until_ready(fn(*args))
-    runs.append(time.perf_counter() - t)
-  return out, first, float(np.median(runs)) if runs else float('nan')
+from physics import timed  # noqa: E402
 
 
 def bench(config, batch: int, backend: str, repeats: int) -> dict:

@@ -4,8 +4,9 @@ Each function is one `jax.pure_callback` with `vmap_method='broadcast_all'`: how
 wrap it, the host gets the whole batch in one call and hands it to `mujoco.batch.Batch`, which
 steps (or casts rays for) every tabletop on a pool of C threads. Batch results are bit-identical
 at any thread count. The host side is pure (each call loads every state it uses from its inputs)
-and keeps one Batch per calling thread and batch size, so the shards of several devices can call
-it at once.
+and lends each call a Batch of its size that no other call holds, so the shards of several devices
+can call it at once. (Not thread-local Batches: XLA runs callbacks on its own threads, whose Python
+thread state, thread-locals included, is torn down after every call.)
 
 Health: a MuJoCo warning (bad qpos/qvel/qacc/ctrl, full contact arena) or error during a call
 makes that tabletop report not ok; the caller marks it unhealthy. Nothing is raised and the other
