@@ -6,7 +6,8 @@ iteration (actions/s, updates/s), and the time of its parts measured alone on th
 the batched primitive (physics), render + heightmaps (rendering), the 16-rotation forward for
 acting plus one SGD update (network).
 
-  python benchmarks/train.py [--config configs/default.py] [--batch 1 8 32] [--mjx-batch 8]
+  python benchmarks/train.py [--config configs/default.py] [--set KEY=VALUE] [--batch 1 8 32]
+      [--mjx-batch 8]
 """
 from __future__ import annotations
 
@@ -25,7 +26,7 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 from mvcoba_jax import agent  # noqa: E402
-from mvcoba_jax.config import resolve  # noqa: E402
+from mvcoba_jax import config as config_lib  # noqa: E402
 from mvcoba_jax.training import Trainer  # noqa: E402
 from physics import timed  # noqa: E402
 
@@ -57,13 +58,13 @@ def bench(config, batch: int, backend: str, repeats: int) -> dict:
 
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  parser.add_argument('--config', default=str(ROOT / 'configs' / 'default.py'))
+  config_lib.add_arguments(parser)
   parser.add_argument('--batch', type=int, nargs='+', default=[1, 8, 32])
   parser.add_argument('--mjx-batch', type=int, nargs='*', default=[8],
                       help='batch sizes at which the MJX backend is measured too')
   parser.add_argument('--repeats', type=int, default=2)
   args = parser.parse_args()
-  config = resolve(args.config)
+  config = config_lib.from_arguments(args)
   rows = []
   for b in args.batch:
     for backend in ('native', 'mjx') if b in args.mjx_batch else ('native',):
@@ -76,7 +77,8 @@ def main():
     same = [o for o in rows if o['batch'] == r['batch'] and o['backend'] == 'mjx']
     if r['backend'] == 'native' and same:
       r['actions_per_s_over_mjx'] = r['actions_per_s'] / same[0]['actions_per_s']
-  print(json.dumps({'benchmark': 'train', 'config': args.config,
+  print(json.dumps({'benchmark': 'train', 'config': args.config or 'configs/default.py',
+                    'overrides': args.overrides,
                     'settings': {'method': config.network.method,
                                  'steps_per_iteration': config.train.steps_per_iteration,
                                  'batch_size': config.train.batch_size,

@@ -1,4 +1,4 @@
-"""Physics backends behind one interface: MJX (JAX, for accelerators) and native MuJoCo (C, for CPUs).
+"""Physics backends behind one interface: MJX (JAX, accelerators) and native MuJoCo (C, CPUs).
 
 A backend steps a batch of tabletops through a control sequence and casts the cameras' rays, both
 as pure functions of a compact `SimState` that are jittable and vmappable; the environment above

@@ -222,9 +222,10 @@ class Trainer:
   def iterate(self, state: TrainState, learn, epsilon) -> tuple[TrainState, StepLog]:
     """`train.steps_per_iteration` lockstep actions in one compiled call (StepLog gains a K axis).
 
-    The scan is unrolled: XLA's CPU backend runs the SGD update inside a loop body (or a
-    `lax.cond` branch) about five times slower than outside one (at B=8, 7.7 s per step in a
-    rolled scan, 2.0 s unrolled; `benchmarks/train.py`), at the price of compiling K steps.
+    On a CPU the scan is unrolled: XLA's CPU backend runs the SGD update inside a loop body (or a
+    `lax.cond` branch) 3-5 times slower than outside one (at B=8, 7.7 s per step in a rolled
+    scan, 2.0 s unrolled), at the price of compiling K steps; accelerators keep the loop.
     """
     return jax.lax.scan(lambda s, _: self.step(s, learn, epsilon), state, None,
-                        length=self.config.train.steps_per_iteration, unroll=True)
+                        length=self.config.train.steps_per_iteration,
+                        unroll=jax.default_backend() == 'cpu')
