@@ -3,7 +3,7 @@
 A backend steps a batch of tabletops through a control sequence and casts the cameras' rays, both
 as pure functions of a compact `SimState` that are jittable and vmappable; the environment above
 never branches on which backend runs. `scene.backend='auto'` picks native MuJoCo when JAX's
-default device is a CPU (MJX's physics and ray casting are 40x and 26x slower there) and MJX on
+default device is a CPU (MJX's physics and ray casting are 80-120x and about 80x slower there) and MJX on
 GPUs and TPUs.
 
 Both backends hold out-of-play object slots at their parking spots: MJX pins their pose on every
