@@ -16,7 +16,7 @@ import numpy as np
 from flax import struct
 
 from envs.tabletop import Layout, Tabletop, where_envs
-from mvcoba_jax import agent, perception
+from mvcoba_jax import agent, perception, task
 from mvcoba_jax.config import Config
 from mvcoba_jax.geometry import pixel_to_world, quat_mul, yaw_quat
 from mvcoba_jax.metrics import RunLog
@@ -81,11 +81,9 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
   on the host after every lockstep action, from inside the compiled loop: one call of a large
   suite can take an hour on a CPU.
   """
-  config = env.config
-  observe = jax.vmap(lambda s: perception.observe(env, s))
   k_start, k_loop = jax.vmap(jax.random.split, out_axes=1)(keys)
   states = jax.vmap(env.reset_from_case)(jax.vmap(jitter)(layouts, k_start), k_start)
-  obs = observe(states)
+  obs = task.observe(env, states)
   n = layouts.in_play.shape[0]
   zeros = jnp.zeros(n, jnp.int32)
   runs = Runs(actions=zeros, grasp_attempts=zeros, grasp_successes=zeros, picked=zeros,
@@ -110,24 +108,19 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
     states, obs, changed, runs, keys, t = carry
     keys, k_act = jax.vmap(jax.random.split, out_axes=1)(keys)
     action = policy(obs, changed, k_act)
-    next_states, info = jax.vmap(env.step)(states, agent.to_world(action, obs.depth, views,
-                                                                   config))
-    next_obs = observe(next_states)
-    now_changed = perception.change_observed(obs, next_obs, info.grasp_success,
-                                             config.perception)
+    next_states, next_obs, out = task.step(env, views, states, obs, runs.failures, action,
+                                           max_failures)
+    info = out.info
     active = ~runs.finished
     count = lambda total, x: total + jnp.where(active, x, 0).astype(jnp.int32)
     is_grasp = action.primitive == agent.GRASP
-    failures = jnp.where(agent.failed(action.primitive, info.grasp_success, now_changed),
-                         runs.failures + 1, 0)
     picked = count(runs.picked, info.picked)
-    cleared = ~jnp.any(next_states.in_play, axis=1)
     runs = runs.replace(
         actions=count(runs.actions, 1), grasp_attempts=count(runs.grasp_attempts, is_grasp),
         grasp_successes=count(runs.grasp_successes, info.grasp_success), picked=picked,
-        lost=count(runs.lost, info.lost), failures=jnp.where(active, failures, runs.failures),
-        finished=runs.finished | cleared | (failures > max_failures) | ~info.healthy,
-        completed=runs.completed | (active & cleared & (picked == runs.objects)))
+        lost=count(runs.lost, info.lost), failures=jnp.where(active, out.failures, runs.failures),
+        finished=runs.finished | out.done,
+        completed=runs.completed | (active & out.cleared & (picked == runs.objects)))
     if record:
       runs = runs.replace(trace=jax.tree.map(lambda buf, x: buf.at[:, t].set(x), runs.trace,
                                              snapshot(obs, states, action, info.left_workspace,
@@ -135,7 +128,7 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
     if progress is not None:
       jax.debug.callback(progress, t + 1, jnp.sum(runs.finished))
     return (where_envs(active, next_states, states), where_envs(active, next_obs, obs),
-            jnp.where(active, now_changed, changed), runs, keys, t + 1)
+            jnp.where(active, out.changed, changed), runs, keys, t + 1)
 
   def cond(carry):
     return jnp.any(~carry[3].finished) & (carry[5] < max_actions)

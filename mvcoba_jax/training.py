@@ -16,7 +16,7 @@ from jax.sharding import Mesh, PartitionSpec
 
 from envs import reserve as reserve_lib
 from envs.tabletop import EnvState, Tabletop, where_envs
-from mvcoba_jax import agent, networks, perception, replay as replay_lib
+from mvcoba_jax import agent, networks, perception, replay as replay_lib, task
 from mvcoba_jax.config import Config
 
 
@@ -99,7 +99,7 @@ class Trainer:
                          out_specs=PartitionSpec('data'), check_vma=False)
 
   def observe(self, env_states):
-    return self.per_env(jax.vmap(lambda s: perception.observe(self.env, s)))(env_states)
+    return task.observe(self.env, env_states, self.per_env)
 
   # ---------------------------------------------------------------- state
   def init(self, key) -> TrainState:
@@ -173,23 +173,15 @@ class Trainer:
     `epsilon` >= 0 overrides the schedule (0 for greedy evaluation); traced, like `learn`, so one
     compiled program serves training and evaluation.
     """
-    cfg, t = self.config, self.config.train
+    t = self.config.train
     key, k_act, k_learn, k_reset = jax.random.split(state.key, 4)
     eps = jnp.where(epsilon >= 0, epsilon, agent.epsilon_at(state.actions, t))
     q = self.q_maps(state.params, state.obs)
     occupied = agent.surface_height(state.obs.depth, self.views) > t.explore_min_height
     action, explored = agent.epsilon_greedy(q, state.changed, occupied, eps, k_act, self.method)
-    env_states, info = self.per_env(jax.vmap(self.env.step))(
-        state.env, agent.to_world(action, state.obs.depth, self.views, cfg))
-    obs = self.observe(env_states)
-    healthy = info.healthy
-    changed = perception.change_observed(state.obs, obs, info.grasp_success, cfg.perception)
-    changed = changed & healthy
-    rew = jnp.where(healthy, agent.reward(action.primitive, info.grasp_success, changed), 0.0)
-    failures = jnp.where(agent.failed(action.primitive, info.grasp_success, changed),
-                         state.failures + 1, 0)
-    cleared = ~jnp.any(env_states.in_play, axis=1)
-    done = cleared | (failures > t.max_consecutive_failures) | ~healthy
+    env_states, obs, out = task.step(self.env, self.views, state.env, state.obs, state.failures,
+                                     action, t.max_consecutive_failures, self.per_env)
+    info, healthy, changed, done = out.info, out.info.healthy, out.changed, out.done
     env_states, reserve = reserve_lib.swap_in(self.per_env(jax.vmap(self.env.reset)),
                                               state.reserve, env_states, done, k_reset)
     obs = jax.lax.cond(jnp.any(done), lambda: where_envs(done, self.observe(env_states), obs),
@@ -202,8 +194,8 @@ class Trainer:
     # Only bad physics does not bootstrap: its next state is not a state of the task.
     transition = replay_lib.Transition(
         obs=state.obs, primitive=action.primitive, rotation=action.rotation, row=action.row,
-        col=action.col, reward=rew, next_obs=where_envs(healthy, obs, state.obs), done=~healthy,
-        changed=changed | done)
+        col=action.col, reward=out.reward, next_obs=where_envs(healthy, obs, state.obs),
+        done=~healthy, changed=changed | done)
     replay = jax.lax.cond(learn, lambda r: replay_lib.add(r, transition), lambda r: r,
                           state.replay)
     state = state.replace(replay=replay)
@@ -212,10 +204,10 @@ class Trainer:
     b = done.shape[0]
     state = state.replace(
         env=env_states, reserve=reserve, obs=obs, changed=changed | done,
-        failures=jnp.where(done, 0, failures), key=key, actions=state.actions + b,
+        failures=jnp.where(done, 0, out.failures), key=key, actions=state.actions + b,
         episodes=state.episodes + jnp.sum(done, dtype=jnp.int32))
     log = StepLog(primitive=action.primitive, grasp_success=info.grasp_success, changed=changed,
-                  reward=rew, done=done, healthy=healthy, picked=info.picked, lost=info.lost,
+                  reward=out.reward, done=done, healthy=healthy, picked=info.picked, lost=info.lost,
                   loss=loss, epsilon=eps, explored=explored)
     return state, log
 

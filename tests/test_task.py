@@ -1,0 +1,40 @@
+"""The task step that training and evaluation share: reward, change, failures and episode ends
+from real physics (tiny scene, native backend)."""
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from envs.primitives import GRASP, PUSH
+from mvcoba_jax import task
+from mvcoba_jax.agent import PixelAction
+from mvcoba_jax.geometry import world_to_pixel
+from tests.helpers import layout, make_env, stack
+
+CUBE, CUBE2 = 0, 1
+
+
+def test_rewards_failures_and_episode_ends():
+  env = make_env('configs/tiny.py')
+  res, half = env.config.perception.heightmap_resolution, env.config.scene.workspace_half
+  one_cube = layout(env, [(CUBE, 0.0, 0.0, 0.0)])
+  two_cubes = layout(env, [(CUBE, 0.0, 0.0, 0.0), (CUBE2, 0.12, 0.12, 0.0)])
+  states = jax.jit(jax.vmap(env.reset_from_case))(stack([one_cube, two_cubes, two_cubes,
+                                                         two_cubes]))
+  obs = task.observe(env, states)
+  cube = world_to_pixel(0.0, 0.0, res, half)
+  empty = world_to_pixel(-0.15, 0.15, res, half)
+  behind = world_to_pixel(-0.05, 0.0, res, half)
+  # The lone cube grasped (clears the table), a grasp at nothing after 2 failures (a third: more
+  # than the limit of 2), the same after none, and a push into the cube from behind.
+  rows = [(GRASP, 0, *cube), (GRASP, 0, *empty), (GRASP, 0, *empty), (PUSH, 0, *behind)]
+  action = PixelAction(*(jnp.asarray(c, jnp.int32) for c in zip(*rows)))
+  failures = jnp.asarray([0, 2, 0, 0], jnp.int32)
+  _, next_obs, out = jax.jit(lambda s, o, f, a: task.step(env, (0, 1), s, o, f, a, 2))(
+      states, obs, failures, action)
+  np.testing.assert_array_equal(np.asarray(out.info.grasp_success), [True, False, False, False])
+  np.testing.assert_array_equal(np.asarray(out.reward), [1.0, 0.0, 0.0, 0.5])
+  np.testing.assert_array_equal(np.asarray(out.changed), [True, False, False, True])
+  np.testing.assert_array_equal(np.asarray(out.failures), [0, 3, 1, 0])
+  np.testing.assert_array_equal(np.asarray(out.cleared), [True, False, False, False])
+  np.testing.assert_array_equal(np.asarray(out.done), [True, True, False, False])
+  assert np.asarray(next_obs.depth[0]).max() < 0.005  # the picked cube is gone from view
