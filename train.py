@@ -24,7 +24,7 @@ from jax.experimental import multihost_utils
 from tqdm import tqdm
 
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import curves, sharding
+from mvcoba_jax import curves, methods, sharding
 from mvcoba_jax.checkpoint import CheckpointError, Checkpoints
 from mvcoba_jax.runtime import enable_compilation_cache
 from mvcoba_jax.training import Trainer
@@ -35,7 +35,7 @@ PRIMITIVE_NAMES = ('push', 'grasp')
 def parse(argv):
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   config_lib.add_arguments(parser)
-  parser.add_argument('--method', choices=config_lib.METHODS, help='sets network.method')
+  parser.add_argument('--method', choices=methods.names(), help='sets network.method')
   parser.add_argument('--seed', type=int, help='sets seed')
   parser.add_argument('--workdir', default='runs/train', help='output folder')
   parser.add_argument('--resume', action='store_true', help='continue from the latest checkpoint')
@@ -61,8 +61,8 @@ def parse(argv):
     config = config_lib.resolve(args.config, overrides)
   except config_lib.ConfigError as e:
     parser.error(str(e))
-  if config.network.method not in config_lib.METHODS:
-    parser.error(f'network.method={config.network.method!r}; choose one of {config_lib.METHODS}')
+  if config.network.method not in methods.names():
+    parser.error(f'network.method={config.network.method!r}; choose one of {methods.names()}')
   return args, config
 
 

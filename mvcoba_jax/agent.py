@@ -9,10 +9,9 @@ import jax.numpy as jnp
 from flax import struct
 
 from envs.primitives import GRASP, PUSH, Action
+from mvcoba_jax import methods
 from mvcoba_jax.config import Config, TrainConfig
 from mvcoba_jax.geometry import pixel_to_world
-
-CHANGE_RULE_METHODS = ('mvcoba', 'mvcoba_2fcn')  # grasp by default, push after no change
 
 
 @struct.dataclass
@@ -25,14 +24,16 @@ class PixelAction:
 
 
 def rule_primitive(method: str, changed, best_per_primitive):
-  """The primitive each method's rule picks: change observation, max-Q, or always grasp.
+  """The primitive the method's rule picks (`methods.RULES`): change observation, max-Q, or
+  always grasp.
 
   `changed` is whether the previous action changed the scene (True before the first action);
   `best_per_primitive` is (B, 2) max Q of each primitive.
   """
-  if method in CHANGE_RULE_METHODS:
+  rule = methods.get(method).rule
+  if rule == 'change':
     return jnp.where(changed, GRASP, PUSH).astype(jnp.int32)
-  if method == 'vpg':
+  if rule == 'max_q':
     return jnp.argmax(best_per_primitive, axis=-1).astype(jnp.int32)
   return jnp.full(changed.shape, GRASP, jnp.int32)
 
@@ -62,7 +63,7 @@ def epsilon_greedy(q, changed, occupied, epsilon, key, method: str):
   k_explore, k_prim, k_rot, k_pixel = jax.random.split(key, 4)
   explore = jax.random.uniform(k_explore, (b,)) < epsilon
   primitive = greedy.primitive
-  if method == 'vpg':
+  if methods.get(method).rule == 'max_q':
     primitive = jnp.where(explore, jax.random.randint(k_prim, (b,), 0, 2), primitive)
   mask = occupied.reshape(b, r * r)
   mask = mask | ~jnp.any(mask, axis=-1, keepdims=True)
@@ -103,7 +104,7 @@ def target_value(q_next, changed, done, rew, method: str, train: TrainConfig):
   b = q_next.shape[0]
   best = q_next.reshape(b, 2, -1).max(axis=-1)
   primitive = rule_primitive(method, changed, best)
-  if method == 'vpg':
+  if methods.get(method).rule == 'max_q':
     future = best.max(axis=-1)
   else:
     future = jnp.take_along_axis(best, primitive[:, None], axis=1)[:, 0]

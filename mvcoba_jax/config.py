@@ -98,13 +98,10 @@ class PerceptionConfig:
   change_max: float = 0.3
 
 
-METHODS = ('mvcoba', 'mvcoba_2fcn', 'vpg', 'grasp_only')
-
-
 @dataclasses.dataclass(frozen=True)
 class NetworkConfig:
   """The Q-network (SPEC section 5). `method` picks the architecture and the action rule."""
-  method: str = 'mvcoba'  # one of METHODS
+  method: str = 'mvcoba'  # a method of mvcoba_jax/methods.py
   trunk: str = 'small'  # 'small' (CPU-sized, from scratch) or 'densenet121' (GPU-sized)
   stem_patch: int = 4  # the stem turns patch x patch cells into one feature vector
   features: tuple[int, ...] = (32, 64, 64)  # channels of the trunk stages (small trunk)

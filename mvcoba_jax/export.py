@@ -27,7 +27,7 @@ import numpy as np
 from flax import nnx
 
 from envs.primitives import GRASP, PUSH
-from mvcoba_jax import agent, networks, perception
+from mvcoba_jax import methods, networks, perception
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.checkpoint import CheckpointError, Checkpoints, incompatibilities
 from mvcoba_jax.config import Config
@@ -197,13 +197,8 @@ def onnx_model(config: Config, model: networks.QNetwork):
 
 def action_rule(method: str) -> dict:
   """The primitive choice of `agent.rule_primitive`, in words and as a name the example reads."""
-  if method in agent.CHANGE_RULE_METHODS:
-    name, text = 'change', ('grasp if the previous action changed the scene (also before the '
-                            'first action of an episode), else push')
-  elif method == 'vpg':
-    name, text = 'max_q', 'the primitive whose Q map holds the larger maximum (ties: push)'
-  else:
-    name, text = 'grasp', 'always grasp'
+  name = methods.get(method).rule
+  text = methods.RULES[name]
   return {'name': name, 'primitive': text,
           'pixel': ('argmax of that primitive\'s Q over (rotation, row, col), flattened in that '
                     'order; the first maximum wins'),

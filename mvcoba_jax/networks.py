@@ -19,6 +19,7 @@ import optax
 from flax import nnx
 
 from envs.primitives import GRASP, PUSH
+from mvcoba_jax import methods
 from mvcoba_jax.config import NetworkConfig
 from mvcoba_jax.geometry import rotate_images, rotation_angle
 
@@ -30,27 +31,14 @@ INPUT_NORMALISATION = {
 }
 NO_ACTION = -1e9  # Q of a primitive a method cannot execute: max-Q never picks it
 
-# Per method, its FCNs: (primitives it scores, camera views it sees).
-_FCNS = {
-    'mvcoba': (((PUSH, GRASP), (0, 1)),),
-    'mvcoba_2fcn': (((PUSH,), (0,)), ((GRASP,), (1,))),
-    'vpg': (((PUSH,), (0,)), ((GRASP,), (0,))),
-    'grasp_only': (((GRASP,), (0,)),),
-}
 TRUNKS = ('small', 'densenet121')
 DENSENET121_BLOCKS = (6, 12, 24, 16)
 DENSENET_GROWTH = 32
 
 
-def _check_method(method: str) -> None:
-  if method not in _FCNS:
-    raise ValueError(f'unknown network method {method!r}; allowed: {", ".join(_FCNS)}')
-
-
 def views_used(method: str) -> tuple[int, ...]:
   """Camera views (indices into Observation's V axis) the method's networks read."""
-  _check_method(method)
-  return tuple(sorted({v for _, views in _FCNS[method] for v in views}))
+  return methods.get(method).views
 
 
 class ResBlock(nnx.Module):
@@ -208,10 +196,10 @@ class QNetwork(nnx.Module):
 
   def __init__(self, method: str, config: NetworkConfig, num_rotations: int, rngs: nnx.Rngs):
     self.num_rotations = num_rotations
+    fcns = methods.get(method).fcns
     self.views = views_used(method)
-    self.primitives = tuple(prims for prims, _ in _FCNS[method])
-    self.fcns = nnx.List([FCN(views, len(prims), config, rngs)
-                          for prims, views in _FCNS[method]])
+    self.primitives = tuple(prims for prims, _ in fcns)
+    self.fcns = nnx.List([FCN(views, len(prims), config, rngs) for prims, views in fcns])
 
   def __call__(self, color, depth, rotations=None):
     """`color` (B, V, R, R, 3) 0..1, `depth` (B, V, R, R) m; `rotations` (B, K) int rotation
@@ -238,7 +226,7 @@ class QNetwork(nnx.Module):
 
 def build_network(config: NetworkConfig, num_rotations: int, rngs: nnx.Rngs) -> QNetwork:
   """The Q-network of `config.method` with the `config.trunk` backbone."""
-  _check_method(config.method)
+  methods.get(config.method)
   if config.trunk not in TRUNKS:
     raise ValueError(f'unknown network trunk {config.trunk!r}; allowed: {", ".join(TRUNKS)}')
   return QNetwork(config.method, config, num_rotations, rngs)

@@ -16,7 +16,8 @@ from flax import nnx
 
 from mvcoba_jax import agent, export, perception
 from mvcoba_jax.checkpoint import Checkpoints
-from mvcoba_jax.config import METHODS, ConfigError, defaulted, from_dict, resolve, to_dict
+from mvcoba_jax.config import ConfigError, defaulted, from_dict, resolve, to_dict
+from mvcoba_jax.methods import names as method_names
 from mvcoba_jax.training import Trainer
 from tests.helpers import layout, stack
 
@@ -141,10 +142,10 @@ def test_onnx_matches_jax_forward_and_action(name, run, parity, states):
         k: want[k] for k in ('primitive', 'rotation', 'row', 'col')}
 
 
-@pytest.mark.parametrize('method', METHODS)
+@pytest.mark.parametrize('method', method_names())
 def test_example_rule_is_the_agents_rule(method):
   """Every method's rule as the example applies it from model.json, on the same Q maps."""
-  q = np.asarray(jax.random.normal(jax.random.PRNGKey(METHODS.index(method)), (1, 2, 4, 8, 8)))
+  q = np.asarray(jax.random.normal(jax.random.PRNGKey(method_names().index(method)), (1, 2, 4, 8, 8)))
   example = _example()
   model = {'primitives': {'push': 0, 'grasp': 1}, 'action_rule': export.action_rule(method)}
   for changed in (False, True):

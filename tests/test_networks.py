@@ -11,8 +11,9 @@ from flax import nnx
 
 from envs import primitives
 from mvcoba_jax import networks
-from mvcoba_jax.config import METHODS, NetworkConfig
+from mvcoba_jax.config import NetworkConfig
 from mvcoba_jax.geometry import rotate_images
+from mvcoba_jax.methods import names as method_names
 
 SIDE, BATCH, ROTATIONS = 32, 2, 16
 TINY = NetworkConfig(features=(8, 8), groups=4)
@@ -37,7 +38,7 @@ def states():
   return _states(jax.random.key(1), BATCH)
 
 
-@pytest.fixture(scope='module', params=METHODS)
+@pytest.fixture(scope='module', params=method_names())
 def method_maps(request, states):
   """Per method: Q maps of `states` and of the same states with view 1 changed."""
   state, forward = _forward(dataclasses.replace(TINY, method=request.param))
