@@ -32,6 +32,8 @@ def trial(variant: str, batch: int, dof: int, seconds: float) -> None:
   from envs import cpu_linalg
   if variant == 'batched':
     cpu_linalg.use_jaxlib_batched_calls()
+  else:
+    cpu_linalg.install()
 
   def factor_and_solve(a, b):
     return jax.scipy.linalg.cho_solve(jax.scipy.linalg.cho_factor(a), b)

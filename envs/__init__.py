@@ -11,7 +11,3 @@ with contextlib.redirect_stdout(io.StringIO()) as _printed:
 for _line in _printed.getvalue().splitlines():
   if not _line.startswith(('Failed to import warp:', 'Failed to import mujoco_warp:')):
     print(_line, file=sys.stderr)
-
-from envs import cpu_linalg  # noqa: E402
-
-cpu_linalg.install()  # serial BLAS, one LAPACK call per matrix: see envs/cpu_linalg.py

@@ -2,8 +2,9 @@
 
 MJX factors nv x nv matrices every step (`cho_factor` and `cho_solve` in the Newton solver, the
 mass matrix and the implicitfast integrator), on a CPU through jaxlib's LAPACK kernels and
-scipy's OpenBLAS. Two threading problems follow on a 2-core machine; `install()` fixes both and
-runs when `envs` is imported.
+scipy's OpenBLAS. Two threading problems follow on a 2-core machine; `install()` fixes both. The
+MJX backend calls it when it is built on a CPU (the native backend needs neither); it changes the
+whole process, once.
 
 - OpenBLAS splits a factorization over its own threads from n = 256 on, which fight XLA's for the
   cores: a 288-dof Cholesky took 240 ms with them and 0.4 ms without, and a scripted grasp in the
@@ -50,7 +51,15 @@ def _one_matrix_at_a_time(primitive, lapack_lowering):
   return lower
 
 
+_chosen = False  # install() or use_jaxlib_batched_calls() has set this process up
+
+
 def install() -> None:
+  """Serial BLAS and one LAPACK call per matrix, unless this process already chose."""
+  global _chosen
+  if _chosen:
+    return
+  _chosen = True
   threadpoolctl.threadpool_limits(limits=1, user_api='blas')
   for primitive, lapack_lowering in _LAPACK_LOWERINGS:
     mlir.register_lowering(primitive, _one_matrix_at_a_time(primitive, lapack_lowering),
@@ -58,6 +67,8 @@ def install() -> None:
 
 
 def use_jaxlib_batched_calls() -> None:
-  """jaxlib's batched LAPACK lowerings again (they can hang, see above): for benchmarks only."""
+  """jaxlib's batched LAPACK lowerings (they can hang, see above), for good: benchmarks only."""
+  global _chosen
+  _chosen = True
   for primitive, lapack_lowering in _LAPACK_LOWERINGS:
     mlir.register_lowering(primitive, lapack_lowering, platform='cpu')

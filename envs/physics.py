@@ -18,6 +18,7 @@ import numpy as np
 from flax import struct
 from mujoco import mjx
 
+from envs import cpu_linalg
 from envs.scene import GRIPPER_GROUP, Scene, park_position
 from mvcoba_jax.config import ConfigError, SceneConfig
 
@@ -90,6 +91,8 @@ class MjxPhysics:
   name = 'mjx'
 
   def __init__(self, scene: Scene):
+    if jax.default_backend() == 'cpu':
+      cpu_linalg.install()  # MJX's factorizations on a CPU would hang or crawl otherwise
     # This process's own device: jax.devices()[0], MJX's default, may belong to another process.
     self.model = mjx.put_model(scene.mj_model, device=jax.local_devices()[0], impl='jax')
     self._parking = Parking(scene)

@@ -1,6 +1,9 @@
 """MJX's linear algebra on a CPU: serial BLAS and one LAPACK call per matrix (envs/cpu_linalg.py)."""
+import os
 import pathlib
 import re
+import subprocess
+import sys
 
 import jax
 import jax.numpy as jnp
@@ -10,7 +13,9 @@ import scipy
 import threadpoolctl
 from mujoco import mjx
 
-import envs  # noqa: F401  (installs the CPU linear algebra settings)
+from envs import cpu_linalg
+
+cpu_linalg.install()  # what the MJX backend does when it is built on a CPU
 
 BOX_ON_FLOOR = """
 <mujoco>
@@ -31,7 +36,7 @@ def lapack_batch_dims(fn, *args) -> list[int]:
   return [int(n) for n in calls]
 
 
-def test_scipy_blas_is_serial_once_envs_is_imported():
+def test_scipy_blas_is_serial_once_installed():
   """From nv = 256 (the random suite's scene) OpenBLAS's own threads fight XLA's and a grasp takes
   23 times longer. Other BLAS copies (OpenCV bundles one) play no part in the physics."""
   scipy_libs = pathlib.Path(scipy.__file__).parent.parent / 'scipy.libs'
@@ -67,3 +72,16 @@ def test_vmapped_mjx_step_makes_no_batched_lapack_call():
   dims = lapack_batch_dims(jax.vmap(mjx.step, in_axes=(None, 0)), model, data)
   assert dims, 'no LAPACK call found: has MJX stopped factoring on the CPU?'
   assert set(dims) == {0}, dims
+
+
+def test_importing_envs_leaves_the_process_as_it_was():
+  """Only building the MJX backend on a CPU installs these settings; importing does not."""
+  code = ('import re, jax, numpy as np, envs.tabletop\n'
+          'a = np.tile(np.eye(3, dtype=np.float32), (2, 1, 1))\n'
+          'text = jax.jit(jax.vmap(jax.numpy.linalg.cholesky)).lower(a).as_text()\n'
+          'print(re.findall(r\'custom_call @lapack_\\w+\\(.*?num_batch_dims = "(\\d+)"\', text))\n')
+  root = pathlib.Path(__file__).resolve().parent.parent
+  out = subprocess.run([sys.executable, '-c', code], cwd=root, capture_output=True, text=True,
+                       env=dict(os.environ, PYTHONPATH=str(root)), timeout=300)
+  assert out.returncode == 0, out.stderr[-2000:]
+  assert out.stdout.strip() == "['1']", out.stdout  # jaxlib's own batched call, not the loop
