@@ -141,9 +141,9 @@ class Trainer:
     """One SGD step on a prioritised batch; a non-finite loss or parameter leaves all as it was.
 
     Without `enabled` the step is computed and discarded: selecting its result costs far less on
-    a CPU than branching around it, since XLA runs a network inside `lax.cond` several times
-    slower (benchmarks/train.py). Returns the state and the loss per transition (0 when the step
-    was refused or not enabled).
+    a CPU than branching around it, since XLA's CPU backend runs the update inside `lax.cond` 5
+    times slower (docs/results/native-backend.md). Returns the state and the loss per transition
+    (0 when the step was refused or not enabled).
     """
     t = self.config.train
     index, batch, valid = replay_lib.sample(state.replay, key, t.batch_size, t.priority_exponent)
