@@ -25,7 +25,7 @@ from tqdm import tqdm
 
 from mvcoba_jax import config as config_lib
 from mvcoba_jax import curves, methods, sharding
-from mvcoba_jax.checkpoint import CheckpointError, Checkpoints
+from mvcoba_jax.checkpoint import CheckpointError, Checkpoints, holds_checkpoint
 from mvcoba_jax.runtime import enable_compilation_cache
 from mvcoba_jax.training import Trainer
 
@@ -116,6 +116,9 @@ def main(argv=None) -> int:
     jax.distributed.initialize(coordinator_address=args.coordinator,
                                num_processes=args.num_processes, process_id=args.process_id)
   workdir = pathlib.Path(args.workdir)
+  if args.resume and not holds_checkpoint(workdir):  # before anything is created or compiled
+    print(f'error: --resume: {workdir / "checkpoints"} holds no checkpoint', file=sys.stderr)
+    return 2
   workdir.mkdir(parents=True, exist_ok=True)
   enable_compilation_cache()
   devices = sharding.mesh()

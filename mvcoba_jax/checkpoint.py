@@ -57,6 +57,12 @@ def _leaves(state) -> dict:
   return {_name(i): leaf for i, leaf in enumerate(jax.tree.leaves(state)) if leaf.size}
 
 
+def holds_checkpoint(workdir) -> bool:
+  """Whether a `train.py` work directory holds a completed checkpoint; looks without creating."""
+  folder = pathlib.Path(workdir) / 'checkpoints'
+  return folder.is_dir() and any(p.is_dir() and p.name.isdigit() for p in folder.iterdir())
+
+
 class Checkpoints:
   """The checkpoints of one work directory."""
 

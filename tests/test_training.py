@@ -1,5 +1,6 @@
 """The jitted training step, the learner, and train.py end to end on the tiny preset."""
 import json
+import time
 
 import jax
 import jax.numpy as jnp
@@ -119,3 +120,11 @@ def test_checkpoint_of_another_network_shape_is_refused(tmp_path, capsys):
   assert run(workdir, '--resume', '--set', 'network.features=4,8') == 2
   err = capsys.readouterr().err
   assert 'network.features' in err and 'another shape' in err
+
+
+def test_resume_without_a_checkpoint_fails_at_once_and_creates_nothing(tmp_path, capsys):
+  workdir = tmp_path / 'typo'
+  started = time.perf_counter()
+  assert run(workdir, '--resume') == 2
+  assert time.perf_counter() - started < 10 and not workdir.exists()
+  assert f'{workdir / "checkpoints"} holds no checkpoint' in capsys.readouterr().err
