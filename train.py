@@ -119,15 +119,15 @@ def main(argv=None) -> int:
   if args.resume and not holds_checkpoint(workdir):  # before anything is created or compiled
     print(f'error: --resume: {workdir / "checkpoints"} holds no checkpoint', file=sys.stderr)
     return 2
-  workdir.mkdir(parents=True, exist_ok=True)
-  enable_compilation_cache()
   devices = sharding.mesh()
-  try:
+  try:  # a config that cannot be built fails here, before the work directory exists
     sharding.check_divisible(config.num_envs, devices)
+    trainer = Trainer(config, devices)
   except ValueError as e:
     print(f'error: {e}', file=sys.stderr)
     return 2
-  trainer = Trainer(config, devices)
+  workdir.mkdir(parents=True, exist_ok=True)
+  enable_compilation_cache()
   checkpoints = Checkpoints(workdir)  # every process takes part in saving its shards
   lead = jax.process_index() == 0  # the one process that writes logs and curves
   iterate = jax.jit(trainer.iterate)

@@ -128,3 +128,12 @@ def test_resume_without_a_checkpoint_fails_at_once_and_creates_nothing(tmp_path,
   assert run(workdir, '--resume') == 2
   assert time.perf_counter() - started < 10 and not workdir.exists()
   assert f'{workdir / "checkpoints"} holds no checkpoint' in capsys.readouterr().err
+
+
+@pytest.mark.parametrize('override, named', [('env.num_objects=99', 'env.num_objects=99'),
+                                             ('scene.backend=warp', "scene.backend='warp'")])
+def test_a_config_that_cannot_be_built_fails_before_the_work_directory_exists(
+    tmp_path, capsys, override, named):
+  workdir = tmp_path / 'run'
+  assert run(workdir, '--set', override) == 2
+  assert not workdir.exists() and named in capsys.readouterr().err
