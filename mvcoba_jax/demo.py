@@ -52,7 +52,8 @@ def main(argv=None) -> int:
   env = Tabletop(config)
   b = config.num_envs
   print(f'{b} tabletops, {config.env.num_objects} objects each, pool of {env.num_slots} slots. '
-        'Compiling reset and step (1-2 min each on a CPU the first time; cached after).')
+        f'Compiling reset and step on the {env.backend.name} backend (cached after the first '
+        'time).')
   reset = jax.jit(jax.vmap(env.reset))
   step = jax.jit(jax.vmap(env.step))
   key = jax.random.PRNGKey(config.seed)
