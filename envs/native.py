@@ -25,7 +25,7 @@ import mujoco
 import numpy as np
 from mujoco import batch as mjbatch
 
-from envs.physics import CAMERA_GROUPS, SimState, parked_slot_qpos
+from envs.physics import CAMERA_GROUPS, SimState
 from envs.scene import Scene
 
 
@@ -43,12 +43,8 @@ class NativePhysics:
     m = scene.mj_model
     self._model = m
     self._threads = scene.config.native_threads or default_threads()
-    idx = scene.index
-    self._slot_qpos = idx.slot_qpos[:, None] + np.arange(7)
-    self._slot_qvel = idx.slot_qvel[:, None] + np.arange(6)
-    self._park_qpos = parked_slot_qpos(scene).astype(np.float64)
     self._slot_bodies = np.array([mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, f'obj{i}')
-                                  for i in range(len(idx.slot_shapes))])
+                                  for i in range(len(scene.index.slot_shapes))])
     self._gravcomp = m.body_gravcomp.copy()
     self._free: dict[int, list[mjbatch.Batch]] = {}  # idle Batches by size
     self._lock = threading.Lock()
@@ -78,12 +74,6 @@ class NativePhysics:
     b.mocap_pos[:] = mocap_pos.reshape(b.mocap_pos.shape)
     b.mocap_quat[:] = mocap_quat.reshape(b.mocap_quat.shape)
 
-  def _pin(self, qpos, qvel, parked):
-    """Parked slots exactly at their parking spots, at rest (in place, (n, nq) and (n, nv))."""
-    rows, slots = np.nonzero(parked)
-    qpos[rows[:, None], self._slot_qpos[slots]] = self._park_qpos[slots]
-    qvel[rows[:, None], self._slot_qvel[slots]] = 0.0
-
   def _simulate_host(self, *arrays):
     # JAX hands over jax.Arrays on the CPU: viewed as NumPy (no copy), no JAX op runs in here.
     qpos, qvel, mocap_pos, mocap_quat, parked, ctrl = (np.asarray(a) for a in arrays)
@@ -93,7 +83,6 @@ class NativePhysics:
     ok = np.ones(n, bool)
     with self._batch(n) as b:
       self._load(b, qpos, mocap_pos, mocap_quat, qvel)
-      self._pin(b.qpos, b.qvel, parked)
       gravcomp = b.expand('body_gravcomp')
       gravcomp[:] = self._gravcomp
       gravcomp[:, self._slot_bodies] = parked
@@ -103,10 +92,9 @@ class NativePhysics:
       except mjbatch.SimulationError as error:
         ok[error.ids] = False
       ok &= ~np.any(b.warning[..., 1] > 0, axis=-1)
-      qpos_out, qvel_out = np.array(b.qpos), np.array(b.qvel)
-    self._pin(qpos_out, qvel_out, parked)
-    return (qpos_out.astype(np.float32).reshape(lead + qpos.shape[-1:]),
-            qvel_out.astype(np.float32).reshape(lead + qvel.shape[-1:]), ok.reshape(lead))
+      qpos_out = b.qpos.astype(np.float32).reshape(lead + qpos.shape[-1:])
+      qvel_out = b.qvel.astype(np.float32).reshape(lead + qvel.shape[-1:])
+    return qpos_out, qvel_out, ok.reshape(lead)
 
   def simulate(self, sim: SimState, parked, ctrl) -> tuple[SimState, jnp.ndarray]:
     """Steps one tabletop through `ctrl` (T, nu) (vmap it: the host gets the batch in one call);
@@ -141,4 +129,3 @@ class NativePhysics:
     host = lambda *state: self._cast_host(origins, directions, *state)
     return jax.pure_callback(host, shapes, sim.qpos, sim.mocap_pos, sim.mocap_quat,
                              vmap_method='broadcast_all')
-

@@ -3,12 +3,12 @@
 A backend steps a batch of tabletops through a control sequence and casts the cameras' rays, both
 as pure functions of a compact `SimState` that are jittable and vmappable; the environment above
 never branches on which backend runs. `scene.backend='auto'` picks native MuJoCo when JAX's
-default device is a CPU (MJX's physics and ray casting are 80-120x and about 80x slower there) and MJX on
-GPUs and TPUs.
+default device is a CPU (MJX's physics and ray casting are 80-120x and about 80x slower there)
+and MJX on GPUs and TPUs.
 
-Both backends hold out-of-play object slots at their parking spots: MJX pins their pose on every
-step; native MuJoCo switches on their gravity compensation, so they float at rest, touch nothing
-and cost nothing.
+Out-of-play object slots come in at their parking spots (the environment puts them there after
+every call) and both backends keep them there: MJX pins their pose on every step; native MuJoCo
+switches on their gravity compensation, so they float at rest, touch nothing and cost nothing.
 """
 from __future__ import annotations
 
@@ -107,7 +107,7 @@ class MjxPhysics:
     pin = self._parking.pin
     def body(d, c):
       return pin(mjx.step(self.model, d.replace(ctrl=c)), parked), None
-    data, _ = jax.lax.scan(body, pin(self._data(sim), parked), ctrl)
+    data, _ = jax.lax.scan(body, self._data(sim), ctrl)
     return sim.replace(qpos=data.qpos, qvel=data.qvel), jnp.bool_(True)
 
   def cast(self, sim: SimState, origins: np.ndarray, directions: np.ndarray):
