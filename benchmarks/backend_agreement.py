@@ -13,21 +13,17 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import pathlib
-import sys
-
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
-
-from envs import primitives  # noqa: E402
-from envs.primitives import Action  # noqa: E402
-from envs.tabletop import Tabletop  # noqa: E402
-from mvcoba_jax.config import resolve  # noqa: E402
-from mvcoba_jax.geometry import rotation_angle  # noqa: E402
 from physics import settings  # noqa: E402
+
+from mvcoba_jax.config import resolve  # noqa: E402
+from mvcoba_jax.sim import primitives  # noqa: E402
+from mvcoba_jax.sim.geometry import rotation_angle  # noqa: E402
+from mvcoba_jax.sim.primitives import Action  # noqa: E402
+from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 
 
 def on(config, backend: str) -> Tabletop:

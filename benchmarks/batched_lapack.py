@@ -1,11 +1,11 @@
-"""Hangs and speed of MJX-shaped batched LAPACK calls, with and without envs/cpu_linalg.py's loop.
+"""Does jaxlib's batched LAPACK path hang on this machine? MJX-shaped calls, trial by trial.
 
 The workload is what a vmapped MJX step asks of LAPACK: in one jitted program, two independent
 batched Cholesky factorizations, each followed by a solve (the mass matrix and the Newton
 solver's Hessian), over B environments of n dof. Each trial runs it in a fresh process for
-`--seconds` and counts as hung when it has not finished `--grace` seconds later. Variants:
-`loop` (what `import envs` installs) and `batched` (jaxlib's own batched calls; BLAS is serial
-in both). Prints one JSON object.
+`--seconds` and counts as hung when it has not finished `--grace` seconds later. jaxlib 0.10
+deadlocked here on 2 cores (docs/results/archive/history.md); from 0.11.1 it should not. BLAS is
+serial, as `runtime.setup()` leaves it. Prints one JSON object.
 
   python benchmarks/batched_lapack.py [--batch 8] [--dof 288] [--trials 6] [--seconds 15]
 """
@@ -14,26 +14,19 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import pathlib
 import platform
 import subprocess
 import sys
 import time
 
-ROOT = pathlib.Path(__file__).resolve().parent.parent
 
-
-def trial(variant: str, batch: int, dof: int, seconds: float) -> None:
-  """One trial, in this process: prints the number of calls made."""
-  sys.path.insert(0, str(ROOT))
+def trial(batch: int, dof: int, seconds: float) -> None:
+  """One trial, in this process: prints the number of calls made and the seconds taken."""
   import jax
   import jax.numpy as jnp
 
-  from envs import cpu_linalg
-  if variant == 'batched':
-    cpu_linalg.use_jaxlib_batched_calls()
-  else:
-    cpu_linalg.install()
+  from mvcoba_jax import runtime
+  runtime.setup()
 
   def factor_and_solve(a, b):
     return jax.scipy.linalg.cho_solve(jax.scipy.linalg.cho_factor(a), b)
@@ -53,10 +46,10 @@ def trial(variant: str, batch: int, dof: int, seconds: float) -> None:
   print(calls, time.perf_counter() - start)
 
 
-def run(variant: str, args) -> dict:
+def run(args) -> dict:
   hung, rates = 0, []
   for _ in range(args.trials):
-    cmd = [sys.executable, __file__, '--trial', variant, '--batch', str(args.batch),
+    cmd = [sys.executable, __file__, '--trial', '--batch', str(args.batch),
            '--dof', str(args.dof), '--seconds', str(args.seconds)]
     try:
       out = subprocess.run(cmd, capture_output=True, text=True, check=True,
@@ -64,7 +57,7 @@ def run(variant: str, args) -> dict:
       rates.append(int(out[-2]) / float(out[-1]))
     except subprocess.TimeoutExpired:
       hung += 1
-    print(f'{variant}: {len(rates)} finished, {hung} hung', file=sys.stderr, flush=True)
+    print(f'{len(rates)} finished, {hung} hung', file=sys.stderr, flush=True)
   return {'trials': args.trials, 'hung': hung,
           'calls_per_s': round(sum(rates) / len(rates), 1) if rates else None}
 
@@ -76,17 +69,17 @@ def main():
   parser.add_argument('--trials', type=int, default=6)
   parser.add_argument('--seconds', type=float, default=15.0)
   parser.add_argument('--grace', type=float, default=30.0, help='past --seconds: hung')
-  parser.add_argument('--trial', choices=('loop', 'batched'), help=argparse.SUPPRESS)
+  parser.add_argument('--trial', action='store_true', help=argparse.SUPPRESS)
   args = parser.parse_args()
   if args.trial:
-    return trial(args.trial, args.batch, args.dof, args.seconds)
-  results = {variant: run(variant, args) for variant in ('loop', 'batched')}
-  speed = [results[v]['calls_per_s'] for v in ('loop', 'batched')]
+    return trial(args.batch, args.dof, args.seconds)
+  import jaxlib
   print(json.dumps({
+      'benchmark': 'batched_lapack',
       'settings': {'batch': args.batch, 'dof': args.dof, 'seconds_per_trial': args.seconds,
-                   'grace_s': args.grace, 'cpus': os.cpu_count(), 'machine': platform.machine()},
-      'results': results,
-      'loop_over_batched_speed': round(speed[0] / speed[1], 2) if all(speed) else None,
+                   'grace_s': args.grace, 'cpus': os.cpu_count(), 'machine': platform.machine(),
+                   'jaxlib': jaxlib.__version__},
+      'results': {'batched': run(args)},
   }, indent=1))
 
 

@@ -12,24 +12,26 @@ from __future__ import annotations
 
 import argparse
 import json
-import pathlib
 import platform
-import sys
 import time
-
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
-from envs import shapes  # noqa: E402
-from envs.primitives import GRASP, Action  # noqa: E402
-from envs.scenarios import Case, CaseObject, case_to_layout, rest_height, rest_quat  # noqa: E402
-from envs.scenarios import stack_layouts  # noqa: E402
-from envs.tabletop import Tabletop  # noqa: E402
+from mvcoba_jax import runtime  # noqa: E402
 from mvcoba_jax.config import resolve  # noqa: E402
-from mvcoba_jax.runtime import enable_compilation_cache  # noqa: E402
+from mvcoba_jax.sim import shapes  # noqa: E402
+from mvcoba_jax.sim.primitives import GRASP, Action  # noqa: E402
+from mvcoba_jax.sim.scenarios import (  # noqa: E402
+  Case,
+  CaseObject,
+  case_to_layout,
+  rest_height,
+  rest_quat,
+  stack_layouts,  # noqa: E402
+)
+from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 
 CENTRE = (0.02, -0.03)
 
@@ -38,7 +40,7 @@ def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--yaw-deg', type=float, default=10.0, help='yaw of every shape')
   args = parser.parse_args()
-  enable_compilation_cache()
+  runtime.setup()
   env = Tabletop(resolve(None))
   names = list(dict.fromkeys(env.scene.index.slot_shapes))  # each shape of the pool once
   rotations = env.config.env.num_rotations

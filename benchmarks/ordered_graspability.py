@@ -15,22 +15,21 @@ import json
 import os
 import pathlib
 import platform
-import sys
 import time
-
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
-import eval as evaluate  # noqa: E402
-from envs import shapes  # noqa: E402
-from envs.primitives import GRASP, Action  # noqa: E402
-from envs.scenarios import case_slots, case_to_layout, read_case  # noqa: E402
-from envs.tabletop import Tabletop  # noqa: E402
 from mvcoba_jax import config as config_lib  # noqa: E402
-from mvcoba_jax.runtime import enable_compilation_cache  # noqa: E402
+from mvcoba_jax import (
+  evaluation,  # noqa: E402
+  runtime,  # noqa: E402
+)
+from mvcoba_jax.sim import shapes  # noqa: E402
+from mvcoba_jax.sim.primitives import GRASP, Action  # noqa: E402
+from mvcoba_jax.sim.scenarios import case_slots, case_to_layout, read_case  # noqa: E402
+from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 
 SUITE = pathlib.Path(__file__).resolve().parent.parent / 'suites' / 'ordered'
 PACKED = 0.06  # an object with a neighbour centre this close is packed; others are isolated
@@ -38,7 +37,7 @@ PACKED = 0.06  # an object with a neighbour centre this close is packed; others 
 
 def run_case(path: pathlib.Path, base, rotations: int) -> dict:
   case = read_case(path)
-  env = Tabletop(evaluate.suite_config(base, evaluate.pool_for([case])))
+  env = Tabletop(evaluation.suite_config(base, evaluation.pool_for([case])))
   n = len(case.objects)
   start = jax.jit(env.reset_from_case)(case_to_layout(case, env))
   batch = jax.tree.map(lambda a: jnp.broadcast_to(a, (n * rotations, *a.shape)), start)
@@ -70,7 +69,7 @@ def main():
   parser.add_argument('--cases', nargs='*', default=None,
                       help='case numbers to run, e.g. 00 02 (default: all six)')
   args = parser.parse_args()
-  enable_compilation_cache()
+  runtime.setup()
   base = config_lib.from_arguments(args)
   rotations = base.env.num_rotations // 2
   paths = sorted(SUITE.glob('ordered-*.scn'))

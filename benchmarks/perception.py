@@ -15,20 +15,16 @@ import argparse
 import dataclasses
 import json
 import os
-import pathlib
 import sys
 import time
-
-ROOT = pathlib.Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
 
 import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
-from envs.tabletop import Tabletop  # noqa: E402
 from mvcoba_jax import perception  # noqa: E402
-from envs.native import default_threads  # noqa: E402
 from mvcoba_jax.config import resolve  # noqa: E402
+from mvcoba_jax.sim.native import default_threads  # noqa: E402
+from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 
 
 def timed(fn, *args):
@@ -51,7 +47,7 @@ def measure(config, batch: int, repeats: int) -> dict:
 
 
 def bench(preset: str, batch: int, mjx: bool, repeats: int) -> dict:
-  config = resolve(ROOT / 'configs' / f'{preset}.py')
+  config = resolve(preset)
   on = lambda backend: dataclasses.replace(
       config, scene=dataclasses.replace(config.scene, backend=backend))
   row = {'preset': preset, 'batch': batch, 'grid': perception.grid_size(config),

@@ -15,12 +15,9 @@ import argparse
 import dataclasses
 import json
 import os
-import pathlib
 import platform
 import sys
 import time
-
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
@@ -29,13 +26,13 @@ import numpy as np  # noqa: E402
 from mujoco import batch as mjbatch  # noqa: E402
 from mujoco import rollout  # noqa: E402
 
-from envs import primitives  # noqa: E402
-from envs.physics import resolve_backend  # noqa: E402
-from envs.native import default_threads  # noqa: E402
-from envs.primitives import Action  # noqa: E402
-from envs.tabletop import Tabletop  # noqa: E402
+from mvcoba_jax import runtime  # noqa: E402
 from mvcoba_jax.config import resolve  # noqa: E402
-from mvcoba_jax.runtime import enable_compilation_cache  # noqa: E402
+from mvcoba_jax.sim import primitives  # noqa: E402
+from mvcoba_jax.sim.native import default_threads  # noqa: E402
+from mvcoba_jax.sim.physics import resolve_backend  # noqa: E402
+from mvcoba_jax.sim.primitives import Action  # noqa: E402
+from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 
 POOLS = {  # object slots per scene size; every slot is in play
     10: (('cube', 2), ('tall_box', 1), ('flat_box', 1), ('prism', 1), ('arch', 1),
@@ -170,7 +167,7 @@ def main():
                       help='use the persistent compilation cache (compile times then mean little)')
   args = parser.parse_args()
   if args.cache:
-    enable_compilation_cache()
+    runtime.setup()
   rows = []
   for n in args.objects:
     for b in args.batch:

@@ -4,7 +4,7 @@ Each device count runs in its own process (XLA fixes the device count at start-u
 same total batch, and prints JSON. On one CPU the "devices" share the same cores, so this checks
 the sharded program's overhead rather than a speed-up; on a GPU host the devices are real.
 
-  python benchmarks/scale.py [--config configs/tiny.py] [--devices 1 2] [--iterations 3]
+  python benchmarks/scale.py [--config tiny] [--devices 1 2] [--iterations 3]
 """
 from __future__ import annotations
 
@@ -45,13 +45,13 @@ print(json.dumps({'devices': len(jax.devices()), 'platform': jax.devices()[0].pl
 
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  parser.add_argument('--config', default=str(ROOT / 'configs' / 'tiny.py'))
+  parser.add_argument('--config', default='tiny')
   parser.add_argument('--devices', type=int, nargs='+', default=[1, 2])
   parser.add_argument('--iterations', type=int, default=3)
   args = parser.parse_args()
   rows = []
   for n in args.devices:
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env = dict(os.environ)
     env['XLA_FLAGS'] = f'{env.get("XLA_FLAGS", "")} --xla_force_host_platform_device_count={n}'
     out = subprocess.run([sys.executable, '-c', WORKER, args.config, str(args.iterations)],
                          cwd=ROOT, env=env, capture_output=True, text=True, check=True)

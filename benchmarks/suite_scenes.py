@@ -1,41 +1,34 @@
 """Physics cost of each evaluation suite's scene, on the native and the MJX backend.
 
-`eval.py` builds one scene per suite: the object-slot pool that holds every case, with contact
-limits that grow with it (`eval.suite_config`). This times one scripted grasp (the full
+`mvcoba-eval` builds one scene per suite: the object-slot pool that holds every case, with contact
+limits that grow with it (`evaluation.suite_config`). This times one scripted grasp (the full
 primitive) from each suite's largest case in that scene, on both backends from the same settled
 start state, and prints one JSON object. `--batch N` runs N copies of the case
-in lockstep, as `eval.py` does; `--lapack batched` times jaxlib's batched LAPACK calls instead
-of envs/cpu_linalg.py's loop over matrices (which a batch of 1 does not use).
+in lockstep, as `mvcoba-eval` does.
 
   python benchmarks/suite_scenes.py [--suite ordered random] [--repeats 1] [--batch 1]
-      [--lapack loop|batched]
 """
 from __future__ import annotations
 
 import argparse
 import dataclasses
 import json
-import pathlib
 import sys
 
-ROOT = pathlib.Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / 'benchmarks'))
-
 import jax  # noqa: E402
-
-import eval as evaluation_cli  # noqa: E402
-from envs import cpu_linalg  # noqa: E402
-from envs.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
-from envs.tabletop import Tabletop  # noqa: E402
-from mvcoba_jax.config import resolve  # noqa: E402
 from physics import backend_row, grasp_actions, settings  # noqa: E402
+
+from mvcoba_jax import evaluation  # noqa: E402
+from mvcoba_jax.config import resolve  # noqa: E402
+from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
+from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
+from mvcoba_jax.suites import SUITES, suite_files  # noqa: E402
 
 
 def bench(suite: str, repeats: int, batch: int) -> dict:
-  files = evaluation_cli.suite_files([suite], evaluation_cli.VPG_CASES)[suite]
+  files = suite_files([suite])[suite]
   cases = [read_case(f) for f in files]
-  config = evaluation_cli.suite_config(resolve(None), evaluation_cli.pool_for(cases))
+  config = evaluation.suite_config(resolve(None), evaluation.pool_for(cases))
   env_on = lambda backend: Tabletop(dataclasses.replace(
       config, scene=dataclasses.replace(config.scene, backend=backend)))
   native = env_on('native')
@@ -59,20 +52,17 @@ def bench(suite: str, repeats: int, batch: int) -> dict:
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--suite', nargs='+', default=['ordered', 'random'],
-                      choices=evaluation_cli.SUITES)
+                      choices=SUITES)
   parser.add_argument('--repeats', type=int, default=1)
   parser.add_argument('--batch', type=int, default=1)
-  parser.add_argument('--lapack', choices=('loop', 'batched'), default='loop')
   args = parser.parse_args()
-  if args.lapack == 'batched':
-    cpu_linalg.use_jaxlib_batched_calls()
   rows = []
   for suite in args.suite:
     rows.append(bench(suite, args.repeats, args.batch))
     print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
   print(json.dumps({
       'benchmark': 'suite_scenes',
-      'settings': {**settings(), 'batch': args.batch, 'lapack': args.lapack,
+      'settings': {**settings(), 'batch': args.batch,
                    'repeats': args.repeats,
                    'primitive': "grasp at the largest case's first object, full script"},
       'results': rows,

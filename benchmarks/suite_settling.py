@@ -2,7 +2,7 @@
 
 A run is scored against the objects in play after `reset_from_case` settles the case, so objects
 that slide or bounce out while a pile settles never count. This settles every case of a suite
-with `--keys` placement jitters, exactly as `eval.py` starts its runs (same scene, same jitter),
+with `--keys` placement jitters, exactly as `mvcoba-eval` starts its runs (same scene, same jitter),
 and prints one JSON object: per case, the objects its file lists, those still in play after
 each key, and those of them within `--edge` of the workspace's border (a run loses objects
 there to any push or nudge). `--suite` takes a suite's name or a folder of case files (e.g. a
@@ -15,27 +15,22 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
-import sys
 import time
-
-ROOT = pathlib.Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / 'benchmarks'))
 
 import jax  # noqa: E402
 import numpy as np  # noqa: E402
+from physics import settings  # noqa: E402
 
-import eval as evaluation_cli  # noqa: E402
-from envs.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
-from envs.tabletop import Tabletop  # noqa: E402
 from mvcoba_jax import evaluation  # noqa: E402
 from mvcoba_jax.config import resolve  # noqa: E402
-from physics import settings  # noqa: E402
+from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
+from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
+from mvcoba_jax.suites import suite_files  # noqa: E402
 
 
 def settle(files: list[pathlib.Path], keys: int, edge: float) -> list[dict]:
   cases = [read_case(f) for f in files]
-  env = Tabletop(evaluation_cli.suite_config(resolve(None), evaluation_cli.pool_for(cases)))
+  env = Tabletop(evaluation.suite_config(resolve(None), evaluation.pool_for(cases)))
   layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(keys)])
   run_keys = jax.random.split(jax.random.PRNGKey(0), len(cases) * keys)
   start = jax.jit(jax.vmap(lambda layout, key: env.reset_from_case(
@@ -57,7 +52,7 @@ def main():
   parser.add_argument('--keys', type=int, default=2, help='placement jitters per case')
   parser.add_argument('--edge', type=float, default=0.03, help='m from the border: near it')
   args = parser.parse_args()
-  files = evaluation_cli.suite_files([args.suite], evaluation_cli.VPG_CASES)[args.suite]
+  files = suite_files([args.suite])[args.suite]
   t0 = time.perf_counter()
   rows = settle(files, args.keys, args.edge)
   listed = sum(r['listed'] for r in rows) * args.keys

@@ -6,7 +6,7 @@ iteration (actions/s, updates/s), and the time of its parts measured alone on th
 the batched primitive (physics), render + heightmaps (rendering), the 16-rotation forward for
 acting plus one SGD update (network).
 
-  python benchmarks/train.py [--config configs/default.py] [--set KEY=VALUE] [--batch 1 8 32]
+  python benchmarks/train.py [--config default] [--set KEY=VALUE] [--batch 1 8 32]
       [--mjx-batch 8]
 """
 from __future__ import annotations
@@ -19,16 +19,14 @@ import pathlib
 import sys
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / 'benchmarks'))
 
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
+from physics import timed  # noqa: E402
 
 from mvcoba_jax import agent  # noqa: E402
 from mvcoba_jax import config as config_lib  # noqa: E402
 from mvcoba_jax.training import Trainer  # noqa: E402
-from physics import timed  # noqa: E402
 
 
 def bench(config, batch: int, backend: str, repeats: int) -> dict:
@@ -77,7 +75,7 @@ def main():
     same = [o for o in rows if o['batch'] == r['batch'] and o['backend'] == 'mjx']
     if r['backend'] == 'native' and same:
       r['actions_per_s_over_mjx'] = r['actions_per_s'] / same[0]['actions_per_s']
-  print(json.dumps({'benchmark': 'train', 'config': args.config or 'configs/default.py',
+  print(json.dumps({'benchmark': 'train', 'config': args.config or 'default',
                     'overrides': args.overrides,
                     'settings': {'method': config.network.method,
                                  'steps_per_iteration': config.train.steps_per_iteration,

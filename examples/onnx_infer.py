@@ -2,7 +2,7 @@
 
   python examples/onnx_infer.py --model DIR --state state.npz [--changed 0|1]
 
-DIR is the output of `python -m mvcoba_jax.export`. state.npz holds `color` (V, R, R, 3) RGB in
+DIR is the output of `mvcoba-export`. state.npz holds `color` (V, R, R, 3) RGB in
 0..1 and `depth` (V, R, R) heights in metres: the heightmaps of every camera view. `--changed`
 says whether the previous action changed the scene (1 before the first action), which the
 change-observation rule of MV-COBA needs. Prints the action as one line of JSON.

@@ -8,10 +8,10 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from envs.primitives import GRASP, PUSH, Action
 from mvcoba_jax import methods
 from mvcoba_jax.config import Config, TrainConfig
-from mvcoba_jax.geometry import pixel_to_world
+from mvcoba_jax.sim.geometry import pixel_to_world
+from mvcoba_jax.sim.primitives import GRASP, PUSH, Action
 
 
 @struct.dataclass

@@ -58,7 +58,7 @@ def _leaves(state) -> dict:
 
 
 def holds_checkpoint(workdir) -> bool:
-  """Whether a `train.py` work directory holds a completed checkpoint; looks without creating."""
+  """Whether a training work directory holds a completed checkpoint; looks without creating."""
   folder = pathlib.Path(workdir) / 'checkpoints'
   return folder.is_dir() and any(p.is_dir() and p.name.isdigit() for p in folder.iterdir())
 

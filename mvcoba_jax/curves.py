@@ -3,11 +3,8 @@ from __future__ import annotations
 
 import pathlib
 
-import matplotlib
-
-matplotlib.use('Agg')
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import numpy as np
+from matplotlib.figure import Figure  # no pyplot: no global backend, no display needed
 
 
 def windowed_rate(hits: np.ndarray, window: int) -> np.ndarray:
@@ -30,7 +27,8 @@ def training_curves(primitives: np.ndarray, successes: np.ndarray, window: int):
 
 def plot(primitives, successes, window: int, path: str | pathlib.Path, title: str = '') -> None:
   (gx, gy), (ax_, ay) = training_curves(np.asarray(primitives), np.asarray(successes), window)
-  fig, axes = plt.subplots(1, 2, figsize=(10, 3.5))
+  fig = Figure(figsize=(10, 3.5))
+  axes = fig.subplots(1, 2)
   axes[0].plot(gx, gy)
   axes[0].set(xlabel='training actions', ylabel=f'grasp success (last {window} grasps)',
               ylim=(0, 1))
@@ -43,4 +41,3 @@ def plot(primitives, successes, window: int, path: str | pathlib.Path, title: st
     fig.suptitle(title)
   fig.tight_layout()
   fig.savefig(path, dpi=100)
-  plt.close(fig)

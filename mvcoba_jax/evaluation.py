@@ -2,24 +2,26 @@
 
 Each run starts from its case (padded to the scene's object slots) with a few millimetres and
 degrees of placement noise, so the n runs of a case differ as real resets do. A run ends when
-every object is picked, when more than `max_failures` consecutive actions fail, or at the action
+every object is picked, when more than `env.max_failures` consecutive actions fail, or at the action
 cap; finished runs stop counting while the batch steps on in lockstep, and the loop stops as
 soon as every run has finished.
 """
 from __future__ import annotations
 
+import collections
+import dataclasses
 from typing import Callable
 
 import jax
 import jax.numpy as jnp
 import numpy as np
-from flax import struct
+from flax import nnx, struct
 
-from envs.tabletop import Layout, Tabletop, where_envs
-from mvcoba_jax import agent, perception, task
+from mvcoba_jax import agent, networks, perception, task
 from mvcoba_jax.config import Config
-from mvcoba_jax.geometry import pixel_to_world, quat_mul, yaw_quat
 from mvcoba_jax.metrics import RunLog
+from mvcoba_jax.sim.geometry import pixel_to_world, quat_mul, yaw_quat
+from mvcoba_jax.sim.tabletop import Layout, Tabletop, where_envs
 
 POSITION_NOISE = 0.002  # m, per axis, on each object's start position
 YAW_NOISE = 0.035  # rad (2 deg)
@@ -72,7 +74,7 @@ def jitter(layout: Layout, key) -> Layout:
 
 
 def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Layout, keys,
-             max_actions: int, max_failures: int = 5, record: bool = False,
+             max_actions: int, record: bool = False,
              progress: Callable[[jnp.ndarray, jnp.ndarray], None] | None = None) -> Runs:
   """Runs the greedy `policy` from each layout (N,) with its key (N,); returns the counters.
 
@@ -108,8 +110,7 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
     states, obs, changed, runs, keys, t = carry
     keys, k_act = jax.vmap(jax.random.split, out_axes=1)(keys)
     action = policy(obs, changed, k_act)
-    next_states, next_obs, out = task.step(env, views, states, obs, runs.failures, action,
-                                           max_failures)
+    next_states, next_obs, out = task.step(env, views, states, obs, runs.failures, action)
     info = out.info
     active = ~runs.finished
     count = lambda total, x: total + jnp.where(active, x, 0).astype(jnp.int32)
@@ -190,3 +191,37 @@ def heuristic_policy(num_rotations: int) -> Policy:
                              rotation=rotation.astype(jnp.int32), row=row.astype(jnp.int32),
                              col=col.astype(jnp.int32))
   return policy
+
+
+def pool_for(cases) -> tuple[tuple[str, int], ...]:
+  """The smallest object-slot pool that holds every case of a suite."""
+  need = collections.Counter()
+  for case in cases:
+    for shape, count in collections.Counter(o.shape for o in case.objects).items():
+      need[shape] = max(need[shape], count)
+  return tuple(sorted(need.items()))
+
+
+def suite_config(config, pool):
+  """`config` with the suite's pool and contact limits that grow with it.
+
+  Random drops (`env.num_objects`) play no part in evaluation; they only have to fit the pool.
+  """
+  slots = sum(n for _, n in pool)
+  scene = dataclasses.replace(config.scene, pool=pool,
+                              max_contact_points=max(config.scene.max_contact_points, 10 * slots),
+                              max_geom_pairs=max(config.scene.max_geom_pairs, 2 * slots))
+  env = dataclasses.replace(config.env, num_objects=min(config.env.num_objects, slots))
+  return dataclasses.replace(config, scene=scene, env=env)
+
+
+def make_policy(method_source, config):
+  """(name, policy factory for an env, views) of a checkpoint or a baseline."""
+  if isinstance(method_source, str):  # a baseline
+    policy = heuristic_policy(config.env.num_rotations)
+    return f'baseline:{method_source}', policy, (0, 1)
+  config, model, step = method_source
+  graphdef, params = nnx.split(model)
+  method = config.network.method
+  q_maps = lambda obs: nnx.merge(graphdef, params)(obs.color, obs.depth)
+  return method, greedy_policy(q_maps, method), networks.views_used(method)

@@ -1,9 +1,8 @@
-"""Exports a trained Q-network for use outside JAX (SPEC section 8).
+"""Exports a trained Q-network for use outside JAX.
 
-  python -m mvcoba_jax.export --checkpoint WORKDIR --out DIR
-
-WORKDIR is a `train.py` work directory (config.json, checkpoints/). DIR gets the following; `load`
-reads it back (eval.py --checkpoint DIR), so a trained policy travels without its training state:
+`export(workdir, out)` (`mvcoba-export --checkpoint WORKDIR --out DIR`) takes a training work
+directory (config.json, checkpoints/) and writes the following to DIR; `policy.load` reads it back
+(`mvcoba-eval --checkpoint DIR`), so a trained policy travels without its training state:
 - params.npz: the network parameters by flat name (`fcns/0/trunk/blocks/0/conv1/kernel`);
 - model.onnx: the Q-network forward for one state and all K rotations, rotations included;
 - model.json: names, shapes and dtypes of the parameters, the config, the heightmap frame, the
@@ -12,164 +11,24 @@ reads it back (eval.py --checkpoint DIR), so a trained policy travels without it
 """
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 import logging
 import pathlib
-import sys
-import warnings
-from unittest import mock
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
-from envs.primitives import GRASP, PUSH
-from mvcoba_jax import methods, networks, perception
 from mvcoba_jax import config as config_lib
-from mvcoba_jax.checkpoint import CheckpointError, Checkpoints, incompatibilities
+from mvcoba_jax import methods, networks, perception
 from mvcoba_jax.config import Config
-from mvcoba_jax.geometry import rotation_angle
-from mvcoba_jax.training import Trainer
+from mvcoba_jax.policy import FORMAT, PolicyError, flat_params, load
+from mvcoba_jax.sim.geometry import rotation_angle
+from mvcoba_jax.sim.primitives import GRASP, PUSH
 
 ONNX_OPSET = 23
-FORMAT = 'mvcoba-jax-export/1'
-
-
-class ExportError(RuntimeError):
-  """A work directory that cannot be exported; the message names the path or config keys."""
-
-
-def _config(saved: dict, path: pathlib.Path) -> Config:
-  """The config of a saved run's JSON; warns about fields it lacks, which take today's defaults."""
-  config = config_lib.from_dict(saved, where=str(path))
-  defaulted = config_lib.defaulted(saved, config)
-  if defaulted:  # e.g. a run from before scene.contact_timeconst trained with other physics
-    warnings.warn(f'{path} lacks fields added since it was written; they take the current '
-                  f'defaults: {", ".join(f"{k}={v!r}" for k, v in defaulted.items())} '
-                  '(add them to it if its run used other values)', stacklevel=3)
-  return config
-
-
-def load(workdir) -> tuple[Config, networks.QNetwork, int]:
-  """(config, Q-network, step) of the latest checkpoint in a `train.py` work directory, or of
-  a folder that `export` wrote (model.json, params.npz: see `load_exported`).
-
-  For a work directory the config (config.json) is checked against the checkpoint's before the
-  scene is built, then the whole training state is restored through `Checkpoints.restore`,
-  the path of `train.py --resume`; its structure comes from `jax.eval_shape`, which traces but
-  compiles nothing.
-  """
-  workdir = pathlib.Path(workdir)
-  if (workdir / 'model.json').is_file():
-    return load_exported(workdir)
-  config_path = workdir / 'config.json'
-  if not config_path.is_file():
-    raise ExportError(f'{config_path} does not exist: --checkpoint takes the work directory of '
-                      'a train.py run (config.json, checkpoints/) or a folder written by '
-                      'mvcoba_jax.export (model.json, params.npz)')
-  if not (workdir / 'checkpoints').is_dir():  # Checkpoints() would create it
-    raise ExportError(f'no checkpoints in {workdir / "checkpoints"}')
-  try:
-    config = _config(json.loads(config_path.read_text()), config_path)
-  except (ValueError, TypeError) as e:  # bad JSON or values that do not fit the fields
-    raise ExportError(f'{config_path}: {e}') from None
-  checkpoints = Checkpoints(workdir)
-  step = checkpoints.latest()
-  if step is None:
-    raise ExportError(f'no checkpoint in {checkpoints.directory}')
-  where = checkpoints.directory / str(step)
-  problems = incompatibilities(checkpoints.meta(step)['config'], config_lib.to_dict(config))
-  if problems:
-    raise ExportError(f'{config_path} does not match checkpoint {where}:\n  '
-                      + '\n  '.join(problems))
-  try:
-    trainer = Trainer(config)
-  except ValueError as e:  # an unknown method or trunk
-    raise ExportError(f'{config_path}: {e}') from None
-  like = jax.eval_shape(trainer.init, jax.random.PRNGKey(config.seed))
-  try:
-    state, _ = checkpoints.restore(like, config, step)
-  except (CheckpointError, ValueError, KeyError) as e:  # the network code changed since
-    raise ExportError(f'checkpoint {where} does not fit the network of {config_path}: {e}'
-                      ) from None
-  return config, nnx.merge(trainer.graphdef, state.params), step
-
-
-def flat_params(model: networks.QNetwork) -> dict[str, np.ndarray]:
-  """`fcns/0/trunk/blocks/0/conv1/kernel` -> array: the NNX state path joined by '/'."""
-  out = {}
-
-  def walk(tree, prefix):
-    for k, v in tree.items():
-      if isinstance(v, dict):
-        walk(v, f'{prefix}{k}/')
-      else:
-        out[f'{prefix}{k}'] = np.asarray(v)
-
-  walk(nnx.to_pure_dict(nnx.state(model)), '')
-  return out
-
-
-def load_exported(folder) -> tuple[Config, networks.QNetwork, int]:
-  """(config, Q-network, step) from what `export` wrote: a trained policy without its training
-  state (replay, optimiser), small enough to ship, as `pretrained/` does.
-
-  Every parameter must be in params.npz with the shape the network of model.json's config
-  expects; otherwise the error names the arrays that differ.
-  """
-  folder = pathlib.Path(folder)
-  model_path, params_path = folder / 'model.json', folder / 'params.npz'
-  try:
-    described = json.loads(model_path.read_text())
-    if described.get('format') != FORMAT:
-      raise ValueError(f'format {described.get("format")!r}, expected {FORMAT!r}')
-    config = _config(described['config'], model_path)
-    step = int(described['source']['checkpoint_step'])
-    model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
-  except (OSError, ValueError, TypeError, KeyError, AttributeError) as e:
-    raise ExportError(f'{model_path}: not an export of mvcoba_jax ({e})') from None
-  want = {n: a.shape for n, a in flat_params(model).items()}
-  try:
-    with np.load(params_path) as saved:
-      got = {n: saved[n] for n in saved.files}
-  except (OSError, ValueError) as e:
-    raise ExportError(f'{params_path}: cannot read it ({e})') from None
-  problems = ([f'{n}: missing' for n in sorted(set(want) - set(got))]
-              + [f'{n}: not a parameter of this network' for n in sorted(set(got) - set(want))]
-              + [f'{n}: shape {got[n].shape}, the network needs {want[n]}'
-                 for n in sorted(set(want) & set(got)) if got[n].shape != want[n]])
-  if problems:
-    raise ExportError(f'{params_path} does not fit the {config.network.method} network of '
-                      f'{model_path}:\n  ' + '\n  '.join(problems[:10]))
-
-  def filled(tree, prefix):
-    return {k: filled(v, f'{prefix}{k}/') if isinstance(v, dict)
-            else jnp.asarray(got[f'{prefix}{k}']) for k, v in tree.items()}
-
-  state = nnx.state(model)
-  nnx.replace_by_pure_dict(state, filled(nnx.to_pure_dict(state), ''))
-  nnx.update(model, state)
-  return config, model, step
-
-
-def _enlarge_without_antialias():
-  """jax.image.resize antialiases by default, which does nothing when enlarging (the network's
-  only resize) but which jax2onnx refuses; this states the identical antialias=False instead.
-
-  Installed while jax2onnx traces, on top of its own patch of jax.image.resize.
-  """
-  resize = jax.image.resize
-
-  def enlarge(image, shape, method, antialias=True, precision=None):
-    if any(o < i for o, i in zip(shape, image.shape)):
-      raise ExportError(f'the network shrinks {image.shape} to {shape}; the ONNX export assumes '
-                        'resizes only enlarge')
-    return resize(image, shape, method, antialias=False, precision=precision)
-
-  return mock.patch.object(jax.image, 'resize', enlarge)
 
 
 def onnx_model(config: Config, model: networks.QNetwork):
@@ -178,16 +37,17 @@ def onnx_model(config: Config, model: networks.QNetwork):
   # JAX and log a traceback each; they are skipped either way.
   logging.getLogger('jax2onnx.plugins.plugin_system').setLevel(logging.ERROR)
   try:
-    from jax2onnx import to_onnx  # a dev extra: the rest of this module works without it
+    from jax2onnx import (
+      to_onnx,  # a dev extra: the rest of this module works without it
+    )
   except ImportError as e:
-    raise ExportError(f'model.onnx needs jax2onnx ({e}); pip install -e ".[dev]"') from None
+    raise PolicyError(f'model.onnx needs jax2onnx ({e}); pip install -e ".[dev]"') from None
 
   graphdef, params = nnx.split(model)
   side, views = perception.grid_size(config), len(config.scene.cameras)
 
   def forward(color, depth):
-    with _enlarge_without_antialias():
-      return nnx.merge(graphdef, params)(color, depth)
+    return nnx.merge(graphdef, params)(color, depth)
 
   return to_onnx(forward, [jax.ShapeDtypeStruct((1, views, side, side, 3), jnp.float32),
                            jax.ShapeDtypeStruct((1, views, side, side), jnp.float32)],
@@ -273,22 +133,3 @@ def export(workdir, out) -> dict[str, pathlib.Path]:
   paths['model_json'].write_text(json.dumps(describe(config, flat, step, workdir), indent=1))
   paths['onnx'].write_bytes(proto.SerializeToString())
   return paths
-
-
-def main(argv=None) -> int:
-  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  parser.add_argument('--checkpoint', required=True, help='work directory of a train.py run')
-  parser.add_argument('--out', required=True, help='output folder')
-  args = parser.parse_args(argv)
-  try:
-    paths = export(args.checkpoint, args.out)
-  except ExportError as e:
-    print(f'error: {e}', file=sys.stderr)
-    return 2
-  for path in paths.values():
-    print(path)
-  return 0
-
-
-if __name__ == '__main__':
-  sys.exit(main())

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from envs.primitives import GRASP, PUSH
+from mvcoba_jax.sim.primitives import GRASP, PUSH
 
 # How a method picks its primitive, and how its Q-learning target and exploration follow:
 # 'change' (MV-COBA's rule): grasp if the previous action changed the scene (also before the

@@ -1,4 +1,4 @@
-"""The paper's evaluation metrics (SPEC section 7) from per-run counts.
+"""The paper's evaluation metrics (docs/design.md) from per-run counts.
 
 Per run: actions executed, grasp attempts, successful grasps, objects in the case, objects
 picked, and whether the run completed (every object picked without more than the allowed

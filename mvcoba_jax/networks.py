@@ -1,4 +1,4 @@
-"""Pixel-wise push and grasp Q-networks (SPEC section 5) as Flax NNX modules.
+"""Pixel-wise push and grasp Q-networks as Flax NNX modules.
 
 A network maps a state (per view a colour and a depth heightmap) and K rotation indices to Q maps
 (B, 2, K, R, R), channel PUSH then GRASP. For rotation k the heightmaps are turned by -angle(k),
@@ -18,10 +18,10 @@ import jax.numpy as jnp
 import optax
 from flax import nnx
 
-from envs.primitives import GRASP, PUSH
 from mvcoba_jax import methods
 from mvcoba_jax.config import NetworkConfig
-from mvcoba_jax.geometry import rotate_images, rotation_angle
+from mvcoba_jax.sim.geometry import rotate_images, rotation_angle
+from mvcoba_jax.sim.primitives import GRASP, PUSH
 
 # The only input scaling, applied after rotation so that the zero fill stays a missing cell.
 INPUT_NORMALISATION = {
@@ -177,7 +177,8 @@ class FCN(nnx.Module):
     x = self.head_hidden(nnx.relu(self.head_norm(x)))
     x = self.head_out(nnx.relu(x))
     n, side = x.shape[0], inputs[self.views[0]].shape[1]
-    return jax.image.resize(x, (n, side, side, x.shape[-1]), 'bilinear')
+    # Always an enlargement, where antialiasing does nothing; stated, as ONNX's Resize needs it.
+    return jax.image.resize(x, (n, side, side, x.shape[-1]), 'bilinear', antialias=False)
 
 
 def _normalise(x):
@@ -234,7 +235,7 @@ def build_network(config: NetworkConfig, num_rotations: int, rngs: nnx.Rngs) -> 
 
 def executed_q(q_maps, primitive, row, col):
   """(B,) Q(s, a) of the executed actions from (B, 2, 1, R, R) maps of their rotation: the only
-  entries the loss sees (SPEC section 6)."""
+  entries the loss sees."""
   return q_maps[jnp.arange(q_maps.shape[0]), primitive, 0, row, col]
 
 

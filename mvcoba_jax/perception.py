@@ -10,9 +10,9 @@ from __future__ import annotations
 import jax.numpy as jnp
 from flax import struct
 
-from envs import cameras
 from mvcoba_jax.config import Config, PerceptionConfig
-from mvcoba_jax.geometry import world_to_pixel
+from mvcoba_jax.sim import cameras
+from mvcoba_jax.sim.geometry import world_to_pixel
 
 HEIGHT_UNIT = 1e-5  # m per step of the packed key
 GEOM_SLOTS = 1024  # geom ids must stay below this to fit the packed key
@@ -88,6 +88,6 @@ def change_threshold(config: PerceptionConfig) -> float:
 
 def change_observed(before: Observation, after: Observation, grasp_success,
                     config: PerceptionConfig):
-  """Either view changed by more than tau cells, or the grasp succeeded (SPEC section 4)."""
+  """Either view changed by more than tau cells, or the grasp succeeded (docs/design.md)."""
   counts = change_counts(before, after, config)
   return jnp.any(counts > change_threshold(config), axis=-1) | grasp_success

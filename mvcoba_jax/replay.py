@@ -1,4 +1,4 @@
-"""Prioritised experience replay that lives on the device (SPEC section 6).
+"""Prioritised experience replay that lives on the device.
 
 The replay is a pytree of fixed-shape ring buffers with `size` and `cursor` as int32 arrays, so
 `add`, `sample` and `update_priorities` are pure functions that run inside the compiled training

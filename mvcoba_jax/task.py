@@ -1,7 +1,7 @@
 """The push-and-grasp task on B tabletops: the one lockstep step that training and evaluation run.
 
 An action is executed in every tabletop, the scene observed again, and the task's bookkeeping done
-(SPEC sections 4 and 6): change observation, reward, the count of consecutive failed actions and
+(docs/design.md): change observation, reward, the count of consecutive failed actions and
 the end of an episode (table cleared, stuck, or bad physics). What follows an episode's end is the
 caller's: training swaps in a fresh tabletop, evaluation stops counting the run.
 """
@@ -13,8 +13,8 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from envs.tabletop import EnvState, StepInfo, Tabletop
 from mvcoba_jax import agent, perception
+from mvcoba_jax.sim.tabletop import EnvState, StepInfo, Tabletop
 
 
 @struct.dataclass
@@ -25,7 +25,7 @@ class Outcome:
   reward: jnp.ndarray
   failures: jnp.ndarray  # consecutive failed actions, this one included
   cleared: jnp.ndarray  # no object left in play
-  done: jnp.ndarray  # cleared, more than `max_failures` failures in a row, or bad physics
+  done: jnp.ndarray  # cleared, more than `env.max_failures` failures in a row, or bad physics
 
 
 def _whole(fn: Callable) -> Callable:
@@ -38,7 +38,7 @@ def observe(env: Tabletop, states: EnvState, per_env: Callable = _whole) -> perc
 
 
 def step(env: Tabletop, views: tuple[int, ...], states: EnvState, obs: perception.Observation,
-         failures, action: agent.PixelAction, max_failures,
+         failures, action: agent.PixelAction,
          per_env: Callable = _whole) -> tuple[EnvState, perception.Observation, Outcome]:
   """Executes `action` (B,) chosen on `obs` in every tabletop; returns the tabletops, what they
   look like now and the outcome."""
@@ -53,6 +53,6 @@ def step(env: Tabletop, views: tuple[int, ...], states: EnvState, obs: perceptio
   failures = jnp.where(agent.failed(action.primitive, info.grasp_success, changed),
                        failures + 1, 0)
   cleared = ~jnp.any(states.in_play, axis=1)
-  done = cleared | (failures > max_failures) | ~healthy
+  done = cleared | (failures > config.env.max_failures) | ~healthy
   return states, next_obs, Outcome(info=info, changed=changed, reward=reward, failures=failures,
                                    cleared=cleared, done=done)

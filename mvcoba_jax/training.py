@@ -14,10 +14,11 @@ import optax
 from flax import nnx, struct
 from jax.sharding import Mesh, PartitionSpec
 
-from envs import reserve as reserve_lib
-from envs.tabletop import EnvState, Tabletop, where_envs
-from mvcoba_jax import agent, networks, perception, replay as replay_lib, task
+from mvcoba_jax import agent, networks, perception, task
+from mvcoba_jax import replay as replay_lib
 from mvcoba_jax.config import Config
+from mvcoba_jax.sim import reserve as reserve_lib
+from mvcoba_jax.sim.tabletop import EnvState, Tabletop, where_envs
 
 
 @struct.dataclass
@@ -180,14 +181,14 @@ class Trainer:
     occupied = agent.surface_height(state.obs.depth, self.views) > t.explore_min_height
     action, explored = agent.epsilon_greedy(q, state.changed, occupied, eps, k_act, self.method)
     env_states, obs, out = task.step(self.env, self.views, state.env, state.obs, state.failures,
-                                     action, t.max_consecutive_failures, self.per_env)
+                                     action, self.per_env)
     info, healthy, changed, done = out.info, out.info.healthy, out.changed, out.done
     env_states, reserve = reserve_lib.swap_in(self.per_env(jax.vmap(self.env.reset)),
                                               state.reserve, env_states, done, k_reset)
     obs = jax.lax.cond(jnp.any(done), lambda: where_envs(done, self.observe(env_states), obs),
                        lambda: obs)
 
-    # The task goes on past an episode's end (SPEC 6's target has no terminal state; VPG does
+    # The task goes on past an episode's end (docs/design.md; VPG does
     # the same): the action that ended an episode bootstraps from the fresh tabletop the robot
     # sees next. A zero future there made clearing the last object worth less than a failed
     # grasp that nudged it (0.5 + gamma * Q > 1), and the learned policy avoided clearing.

@@ -1,29 +1,19 @@
-"""Pictures of what the robot sees and does: camera images, heightmaps, and strips of runs.
-
-  python -m mvcoba_jax.viz CASE [--out viz/] [--settle] [--config ...] [--set ...]
-
-CASE is a scenario file (`.scn` or VPG `.txt`). Without --settle the objects are drawn exactly
-where the file puts them; with it, after the physics has let them come to rest.
-"""
+"""Pictures of what the robot sees and does: camera images, heightmaps, and strips of runs."""
 from __future__ import annotations
 
-import argparse
 import pathlib
-import sys
 
 import cv2
 import jax
 import numpy as np
 
-from envs import cameras
-from envs.primitives import GRASP
-from envs.scenarios import ScenarioError, case_to_layout, read_case
-from envs.scene import MAX_OPENING
-from envs.tabletop import Tabletop
 from mvcoba_jax import config as config_lib
 from mvcoba_jax import perception
-from mvcoba_jax.geometry import rotation_angle
-from mvcoba_jax.runtime import enable_compilation_cache
+from mvcoba_jax.sim import cameras
+from mvcoba_jax.sim.geometry import rotation_angle
+from mvcoba_jax.sim.primitives import GRASP
+from mvcoba_jax.sim.scene import MAX_OPENING
+from mvcoba_jax.sim.tabletop import Tabletop
 
 # Action markers (BGR): a push, a grasp that lifted an object, a grasp that did not.
 PUSH_COLOR, GRASP_OK_COLOR, GRASP_FAILED_COLOR = (255, 160, 0), (0, 200, 0), (0, 0, 230)
@@ -96,26 +86,3 @@ def write_run_strips(trace, names: list[str], out: pathlib.Path,
     paths.append(out / f'{name}.png')
     cv2.imwrite(str(paths[-1]), run_strip(trace, i, config))
   return paths
-
-
-def main(argv=None) -> int:
-  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  parser.add_argument('case', help='scenario file (.scn or VPG .txt)')
-  parser.add_argument('--out', default='viz', help='output folder')
-  parser.add_argument('--settle', action='store_true', help='let the physics settle the case first')
-  config_lib.add_arguments(parser)
-  args = parser.parse_args(argv)
-  try:
-    env = Tabletop(config_lib.from_arguments(args))
-    layout = case_to_layout(read_case(args.case), env)
-  except (config_lib.ConfigError, ScenarioError) as e:
-    parser.error(str(e))
-  enable_compilation_cache()
-  state = (jax.jit(env.reset_from_case) if args.settle else jax.jit(env.place))(layout)
-  for path in write_pictures(env, state, pathlib.Path(args.out)):
-    print(path)
-  return 0
-
-
-if __name__ == '__main__':
-  sys.exit(main())

@@ -1,10 +1,10 @@
-"""Shared test setup: the persistent compilation cache and the preset loader."""
+"""Shared test setup: the entry points' process set-up, with the compilation cache in the
+repository's git-ignored .cache/jax (subprocesses that the tests start inherit it)."""
+import os
 import pathlib
-import sys
 
-ROOT = pathlib.Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))  # configs/ and the packages, also without an editable install
+from mvcoba_jax import runtime
 
-from mvcoba_jax.runtime import enable_compilation_cache  # noqa: E402
-
-enable_compilation_cache()
+os.environ.setdefault('MVCOBA_JAX_CACHE',
+                      str(pathlib.Path(__file__).resolve().parent.parent / '.cache' / 'jax'))
+runtime.setup()

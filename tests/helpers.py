@@ -3,11 +3,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from envs import shapes
-from envs.primitives import Action
-from envs.scene import park_position
-from envs.tabletop import Layout, Tabletop
 from mvcoba_jax.config import override, resolve
+from mvcoba_jax.sim import shapes
+from mvcoba_jax.sim.primitives import Action
+from mvcoba_jax.sim.scene import park_position
+from mvcoba_jax.sim.tabletop import Layout, Tabletop
 
 BACKENDS = ('native', 'mjx')  # physics tests run on both; the rest on the default (auto)
 

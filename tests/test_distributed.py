@@ -1,4 +1,4 @@
-"""`train.py --distributed`: two processes on this machine, one CPU device each, train as one.
+"""`mvcoba-train --distributed`: two processes on this machine, one CPU device each, train as one.
 
 Each process steps its own environment of the tiny preset's two; they join through
 `jax.distributed.initialize` (gloo collectives on the CPU). Process 0 alone writes the logs; both
@@ -23,10 +23,10 @@ def free_port() -> int:
 def test_two_processes_train_as_one(tmp_path):
   workdir = tmp_path / 'run'
   port = free_port()
-  env = dict(os.environ, PYTHONPATH=str(ROOT))
+  env = dict(os.environ)
   env.pop('XLA_FLAGS', None)
   processes = [subprocess.Popen(
-      [sys.executable, 'train.py', '--config', 'configs/tiny.py', '--set', 'train.total_actions=4',
+      [sys.executable, '-m', 'mvcoba_jax.cli.train', '--config', 'tiny', '--set', 'train.total_actions=4',
        '--eval-actions', '1', '--workdir', str(workdir), '--distributed',
        '--coordinator', f'localhost:{port}', '--num-processes', '2', '--process-id', str(i)],
       cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)

@@ -7,11 +7,11 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import eval as eval_cli
-from envs.scenarios import case_to_layout, read_case, stack_layouts
-from envs.tabletop import Tabletop
 from mvcoba_jax import evaluation, metrics, perception, viz
+from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.config import resolve
+from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts
+from mvcoba_jax.sim.tabletop import Tabletop
 
 CASES = {
     'pair.scn': 'cube red 0.05 0.0 0\nflat_box blue -0.1 0.1 30\n',
@@ -25,9 +25,9 @@ def setup(tmp_path_factory):
   folder = tmp_path_factory.mktemp('suite')
   for name, text in CASES.items():
     (folder / name).write_text(text)
-  config = resolve('configs/tiny.py')
+  config = resolve('tiny')
   cases = [read_case(folder / name) for name in CASES]
-  env = Tabletop(eval_cli.suite_config(config, eval_cli.pool_for(cases)))
+  env = Tabletop(evaluation.suite_config(config, evaluation.pool_for(cases)))
   policy = evaluation.heuristic_policy(config.env.num_rotations)
   run = jax.jit(lambda l, k: evaluation.evaluate(env, policy, (0, 1), l, k, MAX_ACTIONS))
   layouts = stack_layouts([case_to_layout(c, env) for c in cases])
@@ -64,7 +64,7 @@ def test_vmapped_evaluation_equals_cases_one_by_one(setup):
 
 
 def test_suite_pool_smaller_than_the_training_drops_is_fine():
-  config = eval_cli.suite_config(resolve('configs/default.py'), (('cube', 2),))
+  config = evaluation.suite_config(resolve('default'), (('cube', 2),))
   assert Tabletop(config).num_slots == 2 and config.env.num_objects == 2
 
 
@@ -72,7 +72,7 @@ def test_malformed_case_fails_with_file_and_line_before_compiling(tmp_path, caps
   bad = tmp_path / 'bad.scn'
   bad.write_text('cube red 0.0 0.0 0\ncube red zero 0.0 0\n')
   code = eval_cli.main(['--baseline', 'heuristic', '--suite', str(bad), '--config',
-                        'configs/tiny.py', '--out', str(tmp_path / 'out')])
+                        'tiny', '--out', str(tmp_path / 'out')])
   assert code == 2
   err = capsys.readouterr().err
   assert 'bad.scn:2' in err and "'x'" in err
@@ -81,7 +81,7 @@ def test_malformed_case_fails_with_file_and_line_before_compiling(tmp_path, caps
 def test_eval_cli_writes_tables_and_visuals(setup, tmp_path, capsys):
   folder = setup[0]
   code = eval_cli.main(['--baseline', 'heuristic', '--suite', str(folder), '--config',
-                        'configs/tiny.py', '--runs', '1', '--max-actions', str(MAX_ACTIONS),
+                        'tiny', '--runs', '1', '--max-actions', str(MAX_ACTIONS),
                         '--out', str(tmp_path / 'out'), '--save-visuals'])
   assert code == 0
   captured = capsys.readouterr()
@@ -107,7 +107,7 @@ def test_eval_cli_writes_tables_and_visuals(setup, tmp_path, capsys):
 def test_run_strip_draws_each_action_where_it_was_taken():
   """A grasp that lifted at a known cell is a green bar there; a failed one is red; a push is an
   arrow pointing along its direction."""
-  config = resolve('configs/tiny.py')
+  config = resolve('tiny')
   r, scale = 56, 3
   steps = lambda *v: np.array([v])
   trace = evaluation.Trace(
@@ -131,7 +131,7 @@ def test_run_strip_draws_each_action_where_it_was_taken():
 
 
 def _results(folder, suite, method, runs_by_case):
-  """A results.json as eval.py writes it, holding only what --tables reads: the per-run counts."""
+  """A results.json as mvcoba-eval writes it, holding only what --tables reads: the per-run counts."""
   folder.mkdir()
   runs = {case: [dict(zip(('actions', 'grasp_attempts', 'grasp_successes', 'objects', 'picked',
                             'lost', 'completed'), r)) for r in rs]
@@ -173,13 +173,13 @@ def test_tables_of_results_without_run_counts_fail_naming_the_file(tmp_path, cap
   (tmp_path / 'list').mkdir()
   (tmp_path / 'list' / 'results.json').write_text('[1, 2]')
   assert eval_cli.main(['--tables', str(tmp_path / 'list'), '--out', str(tmp_path / 'x')]) == 2
-  assert 'list/results.json: not the results of eval.py' in capsys.readouterr().err
+  assert 'list/results.json: not the results of mvcoba-eval' in capsys.readouterr().err
 
 
 def test_losses_name_the_action_and_where_the_object_was():
   """One object leaves in run 0's second action (a push from the middle of the heightmap); a
   loss marked after the run had finished does not count."""
-  config = resolve('configs/tiny.py')
+  config = resolve('tiny')
   steps = lambda *v: np.array([v])
   xyz = np.zeros((1, 3, 2, 3))
   xyz[0, 1, 1] = (0.2, -0.05, 0.03)

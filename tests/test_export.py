@@ -1,4 +1,4 @@
-"""Export (SPEC section 8): params.npz round trip, ONNX parity with onnxruntime on random and
+"""Export: params.npz round trip, ONNX parity with onnxruntime on random and
 rendered heightmaps, the example script's action, and clear errors for bad work directories."""
 import dataclasses
 import importlib.util
@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 from flax import nnx
 
-from mvcoba_jax import agent, export, perception
+from mvcoba_jax import agent, export, perception, policy
 from mvcoba_jax.checkpoint import Checkpoints
+from mvcoba_jax.cli import export as export_cli
 from mvcoba_jax.config import ConfigError, defaulted, from_dict, resolve, to_dict
 from mvcoba_jax.methods import names as method_names
 from mvcoba_jax.training import Trainer
@@ -26,7 +27,7 @@ pytest.importorskip('jax2onnx')
 # jax2onnx's GroupNorm plugin reads Variable.value, which Flax deprecates.
 pytestmark = pytest.mark.filterwarnings('ignore::DeprecationWarning:jax2onnx')
 
-TINY = 'configs/tiny.py'
+TINY = 'tiny'
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 EXAMPLE = ROOT / 'examples' / 'onnx_infer.py'
 # Runs a script as __main__ and fails if anything imported JAX along the way.
@@ -51,7 +52,7 @@ def _example():
 
 @pytest.fixture(scope='module')
 def run(tmp_path_factory):
-  """A work directory as train.py leaves it, its checkpoint holding freshly initialised
+  """A work directory as mvcoba-train leaves it, its checkpoint holding freshly initialised
   parameters: training would compile MJX programs for minutes, and export reads only these."""
   config = resolve(TINY)
   trainer = Trainer(config)
@@ -108,7 +109,7 @@ def jax_action(q, changed, depth, trainer):
 def test_params_npz_round_trips_the_checkpoint(run, exported):
   _, _, params = run
   paths, model, _ = exported
-  want = export.flat_params(nnx.merge(run[0].graphdef, params))
+  want = policy.flat_params(nnx.merge(run[0].graphdef, params))
   with np.load(paths['params']) as saved:
     assert sorted(saved.files) == sorted(want) == sorted(model['params']['arrays'])
     for name, array in want.items():
@@ -178,9 +179,9 @@ def test_example_script_prints_the_jax_action_without_jax(run, exported, parity,
 
 
 def test_export_folder_loads_back_as_the_same_policy(run, exported, parity, states):
-  """What eval.py --checkpoint does with an exported folder: same config, step and Q maps."""
+  """What mvcoba-eval --checkpoint does with an exported folder: same config, step and Q maps."""
   trainer, _, _ = run
-  config, model, step = export.load(exported[0]['params'].parent)
+  config, model, step = policy.load(exported[0]['params'].parent)
   assert config == trainer.config and step == 8
   c, d = states['rendered']
   np.testing.assert_allclose(np.asarray(jax.jit(lambda c, d: model(c, d))(c, d)),
@@ -196,8 +197,8 @@ def test_export_folder_of_another_network_is_a_clear_error(exported, tmp_path):
   arrays[first] = arrays[first][..., :1]
   del arrays[last]
   np.savez(folder / 'params.npz', **arrays)
-  with pytest.raises(export.ExportError, match='does not fit') as error:
-    export.load(folder)
+  with pytest.raises(policy.PolicyError, match='does not fit') as error:
+    policy.load(folder)
   message = str(error.value)
   assert str(folder / 'params.npz') in message
   assert f'{first}: shape' in message and f'{last}: missing' in message
@@ -207,16 +208,17 @@ def test_export_folder_of_another_network_is_a_clear_error(exported, tmp_path):
 def test_shipped_pretrained_policy_fits_the_current_network(folder):
   """A change of the network that would leave a shipped policy unloadable fails here: train and
   export it again (README, Pretrained policy)."""
-  config, model, step = export.load(folder)
+  config, model, step = policy.load(folder)
   assert config.network.method == folder.name and step > 0
-  assert all(np.isfinite(a).all() for a in export.flat_params(model).values())
+  assert all(np.isfinite(a).all() for a in policy.flat_params(model).values())
 
 
 def test_missing_work_directory_is_a_clear_error(tmp_path):
   missing = tmp_path / 'nowhere'
-  with pytest.raises(export.ExportError, match='nowhere'):
+  with pytest.raises(policy.PolicyError, match='nowhere'):
     export.export(missing, tmp_path / 'out')
-  done = subprocess.run([sys.executable, '-m', 'mvcoba_jax.export', '--checkpoint', str(missing),
+  command = pathlib.Path(sys.executable).parent / 'mvcoba-export'  # the installed entry point
+  done = subprocess.run([str(command), '--checkpoint', str(missing),
                          '--out', str(tmp_path / 'out')], capture_output=True, text=True,
                         cwd=ROOT, check=False)
   assert done.returncode == 2
@@ -228,9 +230,9 @@ def test_work_directory_without_checkpoints_is_a_clear_error(run, tmp_path, caps
   workdir = tmp_path / 'fresh'
   (workdir / 'checkpoints').mkdir(parents=True)
   shutil.copy(run[1] / 'config.json', workdir / 'config.json')
-  with pytest.raises(export.ExportError, match='no checkpoint'):
-    export.load(workdir)
-  assert export.main(['--checkpoint', str(workdir), '--out', str(tmp_path / 'out')]) == 2
+  with pytest.raises(policy.PolicyError, match='no checkpoint'):
+    policy.load(workdir)
+  assert export_cli.main(['--checkpoint', str(workdir), '--out', str(tmp_path / 'out')]) == 2
   assert str(workdir / 'checkpoints') in capsys.readouterr().err
 
 
@@ -240,9 +242,9 @@ def test_checkpoint_of_another_network_shape_is_a_clear_error(run, tmp_path, cap
   config = dataclasses.replace(run[0].config, network=dataclasses.replace(
       run[0].config.network, features=(8, 32)))
   (workdir / 'config.json').write_text(json.dumps(to_dict(config)))
-  with pytest.raises(export.ExportError, match='network.features'):
-    export.load(workdir)
-  assert export.main(['--checkpoint', str(workdir), '--out', str(tmp_path / 'out')]) == 2
+  with pytest.raises(policy.PolicyError, match='network.features'):
+    policy.load(workdir)
+  assert export_cli.main(['--checkpoint', str(workdir), '--out', str(tmp_path / 'out')]) == 2
   err = capsys.readouterr().err
   assert 'network.features' in err and str(workdir / 'config.json') in err
 
@@ -255,8 +257,18 @@ def test_config_json_from_before_a_field_existed_warns_with_the_default_it_takes
   del saved['scene']['contact_timeconst']
   (workdir / 'config.json').write_text(json.dumps(saved))
   with pytest.warns(UserWarning, match=r'config\.json lacks .* scene\.contact_timeconst=0\.008'):
-    config, _, _ = export.load(workdir)
+    config, _, _ = policy.load(workdir)
   assert config == run[0].config
+
+
+def test_saved_configs_with_retired_fields_load(run):
+  """The training failure limit became env.max_failures, shared with evaluation: older saved
+  configs that still hold the old field load, and take the shared limit."""
+  saved = to_dict(run[0].config)
+  saved['train']['max_consecutive_failures'] = 10
+  del saved['env']['max_failures']
+  config = from_dict(saved)
+  assert config.env.max_failures == 5 and config.train == run[0].config.train
 
 
 def test_config_round_trips_through_json(run):

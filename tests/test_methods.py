@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from flax import nnx
 
-from envs.primitives import GRASP, PUSH
 from mvcoba_jax import agent, export, methods, networks
 from mvcoba_jax.config import NetworkConfig
+from mvcoba_jax.sim.primitives import GRASP, PUSH
 
 
 @pytest.fixture

@@ -6,16 +6,16 @@ import jax
 import numpy as np
 import pytest
 
-from envs import physics
-from envs.primitives import GRASP, PUSH
 from mvcoba_jax.config import ConfigError, override, resolve
+from mvcoba_jax.sim import physics
+from mvcoba_jax.sim.primitives import GRASP, PUSH
 from tests.helpers import actions, layout, make_env, stack
 
 CUBE, CUBE2, FLAT = 0, 1, 2
 
 
 def test_auto_is_native_on_a_cpu_and_a_bad_name_is_refused():
-  config = resolve('configs/tiny.py')
+  config = resolve('tiny')
   assert config.scene.backend == 'auto'
   assert physics.resolve_backend(config.scene) == 'native'  # the tests run on a CPU
   with pytest.raises(ConfigError, match=r"scene.backend='warp': allowed values are auto, native"):
@@ -24,7 +24,7 @@ def test_auto_is_native_on_a_cpu_and_a_bad_name_is_refused():
 
 def run(threads: int):
   """Settles three layouts and runs a grasp, a push and a grasp at nothing on them."""
-  env = make_env('configs/tiny.py', 'native', f'scene.native_threads={threads}')
+  env = make_env('tiny', 'native', f'scene.native_threads={threads}')
   layouts = stack([layout(env, [(CUBE, 0.03, -0.02, 0.3), (FLAT, -0.08, 0.06, 0.0)]),
                    layout(env, [(CUBE, 0.0, 0.0, 0.0), (CUBE2, 0.1, 0.1, 0.0)]),
                    layout(env, [(FLAT, 0.05, 0.05, 1.0)])])
@@ -49,7 +49,7 @@ def test_results_do_not_depend_on_the_thread_count():
 
 def test_concurrent_callers_get_the_results_of_callers_one_at_a_time():
   """The shards of several devices call the host side at once; each gets its own answer."""
-  env = make_env('configs/tiny.py', 'native')
+  env = make_env('tiny', 'native')
   keys = jax.random.split(jax.random.PRNGKey(3), 4)
   states = jax.jit(jax.vmap(env.place))(jax.vmap(env.sample_layout)(keys))
   sim = jax.tree.map(np.asarray, states.sim)

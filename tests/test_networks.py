@@ -9,11 +9,11 @@ import optax
 import pytest
 from flax import nnx
 
-from envs import primitives
 from mvcoba_jax import networks
 from mvcoba_jax.config import NetworkConfig
-from mvcoba_jax.geometry import rotate_images
 from mvcoba_jax.methods import names as method_names
+from mvcoba_jax.sim import primitives
+from mvcoba_jax.sim.geometry import rotate_images
 
 SIDE, BATCH, ROTATIONS = 32, 2, 16
 TINY = NetworkConfig(features=(8, 8), groups=4)

@@ -4,10 +4,10 @@ import jax
 import numpy as np
 import pytest
 
-from envs import shapes
-from envs.scenarios import case_to_layout, read_case
 from mvcoba_jax import perception
-from mvcoba_jax.geometry import pixel_to_world
+from mvcoba_jax.sim import shapes
+from mvcoba_jax.sim.geometry import pixel_to_world
+from mvcoba_jax.sim.scenarios import case_to_layout, read_case
 from tests.helpers import BACKENDS, layout, make_env, stack
 
 CUBE, CUBE2, FLAT, FLAT2 = 0, 1, 2, 3
@@ -16,7 +16,7 @@ BOX_AT = (0.05, -0.03)  # flat box 10 x 5 x 2.5 cm, long side along x
 
 @pytest.fixture(scope='module', params=BACKENDS)
 def env(request):
-  return make_env('configs/tiny.py', request.param)
+  return make_env('tiny', request.param)
 
 
 def observer(env):
@@ -117,7 +117,7 @@ def test_change_threshold_means_the_same_area_at_any_resolution(env):
 
 def test_both_backends_see_the_same_heightmaps():
   """One scene, cast by mj_ray and by mjx.ray: the same cells seen, heights within 2 mm."""
-  native, mjx = make_env('configs/tiny.py', 'native'), make_env('configs/tiny.py', 'mjx')
+  native, mjx = make_env('tiny', 'native'), make_env('tiny', 'mjx')
   scene = [layout(native, [(CUBE, 0.03, -0.02, 0.3), (FLAT, -0.08, 0.06, 0.5),
                            (CUBE2, 0.12, 0.1, 1.0), (FLAT2, -0.1, -0.15, 2.0)])]
   a, b = observer(native)(scene), observer(mjx)(scene)

@@ -7,9 +7,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from envs import reserve as reserve_lib
-from envs.primitives import GRASP, PUSH
-from mvcoba_jax.geometry import rotation_angle
+from mvcoba_jax.sim import reserve as reserve_lib
+from mvcoba_jax.sim.geometry import rotation_angle
+from mvcoba_jax.sim.primitives import GRASP, PUSH
 from tests.helpers import BACKENDS, actions, layout, make_env, stack
 
 CUBE, CUBE2, FLAT, FLAT2 = 0, 1, 2, 3
@@ -20,7 +20,7 @@ CUBE_AT = (0.03, -0.02)
 
 @pytest.fixture(scope='module', params=BACKENDS)
 def env(request):
-  return make_env('configs/tiny.py', request.param)
+  return make_env('tiny', request.param)
 
 
 @pytest.fixture(scope='module')

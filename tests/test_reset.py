@@ -9,7 +9,7 @@ from tests.penetration import max_penetration
 
 @pytest.fixture(scope='module', params=BACKENDS)
 def env(request):
-  return make_env('configs/default.py', request.param)
+  return make_env('default', request.param)
 
 
 @pytest.fixture(scope='module')

@@ -4,29 +4,33 @@ No physics: layouts are checked on the host and overlaps with native MuJoCo coll
 """
 import dataclasses
 import math
-import os
 import pathlib
 
 import mujoco
 import numpy as np
 import pytest
 
-from envs import shapes
-from envs.scenarios import (Case, CaseObject, ScenarioError, case_to_layout, half_height,
-                            read_case, stack_layouts, write_scenario)
-from envs.scene import GRIPPER_PARK, park_position
-from envs.tabletop import Tabletop
-from eval import pool_for, suite_config
 from mvcoba_jax.config import resolve
-from mvcoba_jax.geometry import quat_mul, yaw_quat
-from suites import generate
+from mvcoba_jax.evaluation import pool_for, suite_config
+from mvcoba_jax.sim import shapes
+from mvcoba_jax.sim.geometry import quat_mul, yaw_quat
+from mvcoba_jax.sim.scenarios import (
+  Case,
+  CaseObject,
+  ScenarioError,
+  case_to_layout,
+  half_height,
+  read_case,
+  stack_layouts,
+  write_scenario,
+)
+from mvcoba_jax.sim.scene import GRIPPER_PARK, park_position
+from mvcoba_jax.sim.tabletop import Tabletop
+from mvcoba_jax.suites import SUITES_DIR, generate
 from tests.penetration import max_penetration
 
-VPG_CASES = pathlib.Path(os.environ.get(
-    'MVCOBA_VPG_CASES', pathlib.Path(__file__).resolve().parents[2] / 'shared' / 'vpg-test-cases'))
+VPG_CASES = SUITES_DIR / 'vpg'
 VPG_COUNTS = (4, 5, 3, 5, 5, 6, 3, 6, 6, 5, 4)
-REPO = pathlib.Path(__file__).resolve().parents[1]
-CONFIGS = REPO / 'configs'
 
 SCN = """\
 # a little case
@@ -52,7 +56,7 @@ def rotation(quat) -> np.ndarray:
 
 def three_cubes(occluders=()):
   """Tiny scene with exactly three cube slots (building it compiles nothing)."""
-  config = resolve(CONFIGS / 'tiny.py', ['scene.pool=cube:3'])
+  config = resolve('tiny', ['scene.pool=cube:3'])
   return dataclasses.replace(config, scene=dataclasses.replace(config.scene, occluders=occluders))
 
 
@@ -194,8 +198,6 @@ def test_bad_vpg_line_names_file_line_and_field(tmp_path, line, field, says):
 
 @pytest.fixture(scope='module')
 def public_cases():
-  if not VPG_CASES.is_dir():
-    pytest.skip(f'no VPG test cases at {VPG_CASES} (set MVCOBA_VPG_CASES)')
   return [read_case(VPG_CASES / f'test-10-obj-{i:02d}.txt') for i in range(len(VPG_COUNTS))]
 
 
@@ -229,7 +231,7 @@ def deepest_overlap(env, layout) -> float:
 
 
 def test_public_vpg_cases_do_not_interpenetrate(public_cases):
-  env = Tabletop(resolve(CONFIGS / 'default.py'))
+  env = Tabletop(resolve('default'))
   layouts = [case_to_layout(c, env) for c in public_cases]
   batch = stack_layouts(layouts)
   assert batch.pos.shape == (len(layouts), env.num_slots, 3)
@@ -249,16 +251,16 @@ def generated():
 
 @pytest.mark.parametrize('suite', sorted(SHIPPED))
 def test_shipped_suites_are_generated_and_start_apart(suite, generated):
-  """The files are what suites/generate.py writes, with the issue's case and object counts;
+  """The files are what `python -m mvcoba_jax.suites.generate` writes, with the issue's case and object counts;
   every object (the isolated one too) starts clear of the others and of the table."""
   texts = generated[suite]
-  files = sorted((REPO / 'suites' / suite).glob('*.scn'))
-  assert [f.read_text() for f in files] == texts, 'run python suites/generate.py'
+  files = sorted((SUITES_DIR / suite).glob('*.scn'))
+  assert [f.read_text() for f in files] == texts, 'run python -m mvcoba_jax.suites.generate'
   cases = [read_case(f) for f in files]
   n_cases, fewest, most = SHIPPED[suite]
   assert len(cases) == n_cases
   assert all(fewest + 1 <= len(c.objects) <= most + 1 for c in cases)  # + the isolated object
-  env = Tabletop(suite_config(resolve(CONFIGS / 'default.py'), pool_for(cases)))
+  env = Tabletop(suite_config(resolve('default'), pool_for(cases)))
   for case in cases:
     deepest = deepest_overlap(env, case_to_layout(case, env))
     assert deepest < 0.002, (case.name, deepest)

@@ -5,8 +5,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from envs.scene import build_mjcf
 from mvcoba_jax.config import SceneConfig
+from mvcoba_jax.sim.scene import build_mjcf
 
 
 def test_every_geom_gets_the_configured_contact_time_constant():

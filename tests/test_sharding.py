@@ -14,13 +14,13 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 
 SCRIPT = """
 import jax, jax.numpy as jnp, numpy as np
-from mvcoba_jax.runtime import enable_compilation_cache
-enable_compilation_cache()
+from mvcoba_jax import runtime
+runtime.setup()
 from mvcoba_jax import sharding
 from mvcoba_jax.config import resolve
 from mvcoba_jax.training import Trainer
 assert len(jax.devices()) == 2, jax.devices()
-config = resolve('configs/tiny.py', ['train.steps_per_iteration=1'])
+config = resolve('tiny', ['train.steps_per_iteration=1'])
 trainer, sharded = Trainer(config), Trainer(config, sharding.mesh())
 state = jax.jit(trainer.init)(jax.random.PRNGKey(0))
 args = (jnp.bool_(True), jnp.float32(-1.0))
@@ -52,8 +52,7 @@ print('EQUIVALENT', float(loss_a), float(loss_b), gap)
 
 
 def test_two_virtual_devices_match_one_device():
-  env = dict(os.environ, XLA_FLAGS='--xla_force_host_platform_device_count=2',
-             PYTHONPATH=str(ROOT))
+  env = dict(os.environ, XLA_FLAGS='--xla_force_host_platform_device_count=2')
   result = subprocess.run([sys.executable, '-c', SCRIPT], cwd=ROOT, env=env,
                           capture_output=True, text=True, timeout=1800)
   assert result.returncode == 0, result.stderr[-3000:]

@@ -4,17 +4,17 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from envs.primitives import GRASP, PUSH
 from mvcoba_jax import task
 from mvcoba_jax.agent import PixelAction
-from mvcoba_jax.geometry import world_to_pixel
+from mvcoba_jax.sim.geometry import world_to_pixel
+from mvcoba_jax.sim.primitives import GRASP, PUSH
 from tests.helpers import layout, make_env, stack
 
 CUBE, CUBE2 = 0, 1
 
 
 def test_rewards_failures_and_episode_ends():
-  env = make_env('configs/tiny.py')
+  env = make_env('tiny', 'native', 'env.max_failures=2')
   res, half = env.config.perception.heightmap_resolution, env.config.scene.workspace_half
   one_cube = layout(env, [(CUBE, 0.0, 0.0, 0.0)])
   two_cubes = layout(env, [(CUBE, 0.0, 0.0, 0.0), (CUBE2, 0.12, 0.12, 0.0)])
@@ -25,11 +25,11 @@ def test_rewards_failures_and_episode_ends():
   empty = world_to_pixel(-0.15, 0.15, res, half)
   behind = world_to_pixel(-0.05, 0.0, res, half)
   # The lone cube grasped (clears the table), a grasp at nothing after 2 failures (a third: more
-  # than the limit of 2), the same after none, and a push into the cube from behind.
+  # than env.max_failures=2), the same after none, and a push into the cube from behind.
   rows = [(GRASP, 0, *cube), (GRASP, 0, *empty), (GRASP, 0, *empty), (PUSH, 0, *behind)]
   action = PixelAction(*(jnp.asarray(c, jnp.int32) for c in zip(*rows)))
   failures = jnp.asarray([0, 2, 0, 0], jnp.int32)
-  _, next_obs, out = jax.jit(lambda s, o, f, a: task.step(env, (0, 1), s, o, f, a, 2))(
+  _, next_obs, out = jax.jit(lambda s, o, f, a: task.step(env, (0, 1), s, o, f, a))(
       states, obs, failures, action)
   np.testing.assert_array_equal(np.asarray(out.info.grasp_success), [True, False, False, False])
   np.testing.assert_array_equal(np.asarray(out.reward), [1.0, 0.0, 0.0, 0.5])

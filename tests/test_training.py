@@ -1,4 +1,4 @@
-"""The jitted training step, the learner, and train.py end to end on the tiny preset."""
+"""The jitted training step, the learner, and mvcoba-train end to end on the tiny preset."""
 import json
 import time
 
@@ -7,13 +7,12 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import train
-from mvcoba_jax import replay as replay_lib
 from mvcoba_jax.checkpoint import Checkpoints
+from mvcoba_jax.cli import train as train_cli
 from mvcoba_jax.config import resolve
 from mvcoba_jax.training import Trainer
 
-TINY = 'configs/tiny.py'
+TINY = 'tiny'
 
 
 @pytest.fixture(scope='module')
@@ -87,7 +86,7 @@ def test_non_finite_loss_leaves_parameters_untouched(trainer, trained):
 
 
 def run(workdir, *extra):
-  return train.main(['--config', TINY, '--workdir', str(workdir), '--eval-actions', '2', *extra])
+  return train_cli.main(['--config', TINY, '--workdir', str(workdir), '--eval-actions', '2', *extra])
 
 
 def test_train_py_smoke_checkpoint_and_exact_resume(tmp_path):

@@ -1,0 +1,131 @@
+"""Evaluates trained policies (or a baseline) on test suites and prints the paper's tables.
+
+  mvcoba-eval --checkpoint runs/train [runs/vpg ...] [--suite random|ordered|occluded|isolated|vpg|all|PATH ...]
+              [--runs 5] [--max-actions 60] [--out eval_out] [--save-visuals]
+  mvcoba-eval --baseline heuristic --suite ordered        # no checkpoint needed
+  mvcoba-eval --compare runs/mvcoba runs/vpg ...          # same as several --checkpoint
+  mvcoba-eval --tables runs/eval-a runs/eval-b --out X    # one table from earlier --out folders
+
+Every (case, run) pair of a suite runs in one jitted, vmapped call (cases padded to a common
+object-slot pool). One table per suite and metric: methods as rows, cases as columns (paper
+Tables 2-4); also written as JSON and Markdown to --out, rewritten as each method finishes, so a
+killed evaluation keeps what it finished. --tables joins the results of evaluations run apart (in
+parallel, or on other machines) into one table, with no compile. With --save-visuals, each run also
+gets a PNG strip of its heightmaps and actions in --out/visuals/SUITE/METHOD/, beside losses.json:
+every object that left the workspace, the action it left in and where it was when it began.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import sys
+import time
+
+import jax
+from tqdm import tqdm
+
+from mvcoba_jax import config as config_lib
+from mvcoba_jax import evaluation, runtime, viz
+from mvcoba_jax import report as report_lib
+from mvcoba_jax.policy import PolicyError, load
+from mvcoba_jax.sim.scenarios import (
+  ScenarioError,
+  case_to_layout,
+  read_case,
+  stack_layouts,
+)
+from mvcoba_jax.sim.tabletop import Tabletop
+from mvcoba_jax.suites import SUITES, suite_files
+
+
+def main(argv=None) -> int:
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  config_lib.add_arguments(parser)
+  parser.add_argument('--checkpoint', '--compare', nargs='+', default=[],
+                      help='work directories of mvcoba-train runs, or folders written by '
+                           'mvcoba-export (e.g. pretrained/mvcoba)')
+  parser.add_argument('--baseline', choices=('heuristic',),
+                      help='a policy that needs no checkpoint')
+  parser.add_argument('--tables', nargs='+', default=[], metavar='EVAL_DIR',
+                      help='--out folders of earlier evaluations: print and write their joined '
+                           'tables, evaluate nothing')
+  parser.add_argument('--suite', nargs='+', default=['all'],
+                      help=f'{", ".join(SUITES)}, all, or paths of case files/folders')
+  parser.add_argument('--runs', type=int, default=5, help='runs per case')
+  parser.add_argument('--max-actions', type=int, default=60, help='action cap per run')
+  parser.add_argument('--out', default='eval_out', help='folder for JSON and Markdown tables')
+  parser.add_argument('--seed', type=int, default=0)
+  parser.add_argument('--save-visuals', action='store_true',
+                      help='write a PNG strip of heightmaps and actions per run')
+  args = parser.parse_args(argv)
+  if args.tables:
+    if args.checkpoint or args.baseline:
+      parser.error('--tables joins earlier results; give it without --checkpoint or --baseline')
+    try:
+      report = report_lib.joined_report(args.tables)
+    except report_lib.ResultsError as e:
+      print(f'error: {e}', file=sys.stderr)
+      return 2
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    print(report_lib.write_report(report, out))
+    print(f'wrote {out / "results.json"} and {out / "results.md"}')
+    return 0
+  if not args.checkpoint and not args.baseline:
+    parser.error('give --checkpoint DIR ..., --baseline heuristic or --tables EVAL_DIR ...')
+  try:  # everything that can be wrong with the input fails here, before any compile
+    base = config_lib.from_arguments(args)
+    suites = {name: [read_case(f) for f in files]
+              for name, files in suite_files(args.suite).items()}
+    sources = [load(d) for d in args.checkpoint] + ([args.baseline] if args.baseline else [])
+    labels = report_lib.row_labels(args.checkpoint, [s[0].network.method for s in sources
+                                          if not isinstance(s, str)])
+  except (config_lib.ConfigError, ScenarioError, PolicyError) as e:
+    print(f'error: {e}', file=sys.stderr)
+    return 2
+  runtime.setup()
+  out = pathlib.Path(args.out)
+  out.mkdir(parents=True, exist_ok=True)
+  report = {}
+  for suite, cases in suites.items():
+    names = [c.name for c in cases]
+    rows = {}
+    for i, source in enumerate(sources):
+      config = base if isinstance(source, str) else source[0]
+      env = Tabletop(evaluation.suite_config(config, evaluation.pool_for(cases)))
+      method, policy, views = evaluation.make_policy(source, env.config)
+      method = labels[i] if i < len(labels) else method
+      layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(args.runs)])
+      keys = jax.random.split(jax.random.PRNGKey(args.seed), len(cases) * args.runs)
+      print(f'{suite}: {method}, {len(cases)} cases x {args.runs} runs, up to '
+            f'{args.max_actions} actions each; compiling and running...', flush=True)
+      start = time.perf_counter()
+      with tqdm(total=args.max_actions, unit='action', desc=f'  {suite}') as bar:
+        def progress(done, finished, bar=bar, n=len(layouts.in_play)):
+          bar.set_postfix_str(f'{int(finished)}/{n} runs finished', refresh=False)
+          bar.update(int(done) - bar.n)
+        runs = jax.jit(lambda l, k: evaluation.evaluate(
+            env, policy, views, l, k, args.max_actions, record=args.save_visuals,
+            progress=progress))(layouts, keys)
+        logs = evaluation.run_logs(runs)
+      if args.save_visuals:
+        folder = out / 'visuals' / pathlib.Path(suite).name / method.replace(':', '_')
+        run_names = [f'{n}_run{r}' for n in names for r in range(args.runs)]
+        viz.write_run_strips(jax.device_get(runs.trace), run_names, folder, env.config)
+        lost = evaluation.losses(runs.trace, run_names, env.config)
+        (folder / 'losses.json').write_text(json.dumps(lost, indent=1))
+        print(f'  visuals in {folder}; {report_lib.loss_summary(lost)}', flush=True)
+      by_case = {name: logs[i * args.runs:(i + 1) * args.runs] for i, name in enumerate(names)}
+      rows[method] = report_lib.scored(by_case, time.perf_counter() - start)
+      report[suite] = rows
+      report_lib.write_report(report, out)
+      print(f'  done in {rows[method]["wall_s"]:.0f} s', flush=True)
+    for text in report_lib.suite_tables(suite, rows):
+      print('\n' + text)
+  print(f'\nwrote {out / "results.json"} and {out / "results.md"}')
+  return 0
+
+
+if __name__ == '__main__':
+  sys.exit(main())

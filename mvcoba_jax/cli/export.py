@@ -1,0 +1,30 @@
+"""Exports the latest checkpoint of a training run: params.npz, model.json and model.onnx.
+
+  mvcoba-export --checkpoint WORKDIR --out DIR
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from mvcoba_jax.export import export
+from mvcoba_jax.policy import PolicyError
+
+
+def main(argv=None) -> int:
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument('--checkpoint', required=True, help='work directory of an mvcoba-train run')
+  parser.add_argument('--out', required=True, help='output folder')
+  args = parser.parse_args(argv)
+  try:
+    paths = export(args.checkpoint, args.out)
+  except PolicyError as e:
+    print(f'error: {e}', file=sys.stderr)
+    return 2
+  for path in paths.values():
+    print(path)
+  return 0
+
+
+if __name__ == '__main__':
+  sys.exit(main())

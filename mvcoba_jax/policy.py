@@ -1,0 +1,138 @@
+"""A trained Q-network as a policy: read from a training work directory (its latest checkpoint)
+or from a folder that `mvcoba-export` wrote (model.json, params.npz), which travels without the
+training state."""
+from __future__ import annotations
+
+import json
+import pathlib
+import warnings
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import nnx
+
+from mvcoba_jax import config as config_lib
+from mvcoba_jax import networks
+from mvcoba_jax.checkpoint import CheckpointError, Checkpoints, incompatibilities
+from mvcoba_jax.config import Config
+from mvcoba_jax.training import Trainer
+
+FORMAT = 'mvcoba-jax-export/1'
+
+
+class PolicyError(RuntimeError):
+  """A folder that holds no usable policy; the message names the path or config keys."""
+
+
+def _config(saved: dict, path: pathlib.Path) -> Config:
+  """The config of a saved run's JSON; warns about fields it lacks, which take today's defaults."""
+  config = config_lib.from_dict(saved, where=str(path))
+  defaulted = config_lib.defaulted(saved, config)
+  if defaulted:  # e.g. a run from before scene.contact_timeconst trained with other physics
+    warnings.warn(f'{path} lacks fields added since it was written; they take the current '
+                  f'defaults: {", ".join(f"{k}={v!r}" for k, v in defaulted.items())} '
+                  '(add them to it if its run used other values)', stacklevel=3)
+  return config
+
+
+def load(workdir) -> tuple[Config, networks.QNetwork, int]:
+  """(config, Q-network, step) of the latest checkpoint in a training work directory, or of
+  a folder that `export` wrote (model.json, params.npz: see `load_exported`).
+
+  For a work directory the config (config.json) is checked against the checkpoint's before the
+  scene is built, then the whole training state is restored through `Checkpoints.restore`,
+  the path of `mvcoba-train --resume`; its structure comes from `jax.eval_shape`, which traces but
+  compiles nothing.
+  """
+  workdir = pathlib.Path(workdir)
+  if (workdir / 'model.json').is_file():
+    return load_exported(workdir)
+  config_path = workdir / 'config.json'
+  if not config_path.is_file():
+    raise PolicyError(f'{config_path} does not exist: --checkpoint takes the work directory of '
+                      'an mvcoba-train run (config.json, checkpoints/) or a folder written by '
+                      'mvcoba-export (model.json, params.npz)')
+  if not (workdir / 'checkpoints').is_dir():  # Checkpoints() would create it
+    raise PolicyError(f'no checkpoints in {workdir / "checkpoints"}')
+  try:
+    config = _config(json.loads(config_path.read_text()), config_path)
+  except (ValueError, TypeError) as e:  # bad JSON or values that do not fit the fields
+    raise PolicyError(f'{config_path}: {e}') from None
+  checkpoints = Checkpoints(workdir)
+  step = checkpoints.latest()
+  if step is None:
+    raise PolicyError(f'no checkpoint in {checkpoints.directory}')
+  where = checkpoints.directory / str(step)
+  problems = incompatibilities(checkpoints.meta(step)['config'], config_lib.to_dict(config))
+  if problems:
+    raise PolicyError(f'{config_path} does not match checkpoint {where}:\n  '
+                      + '\n  '.join(problems))
+  try:
+    trainer = Trainer(config)
+  except ValueError as e:  # an unknown method or trunk
+    raise PolicyError(f'{config_path}: {e}') from None
+  like = jax.eval_shape(trainer.init, jax.random.PRNGKey(config.seed))
+  try:
+    state, _ = checkpoints.restore(like, config, step)
+  except (CheckpointError, ValueError, KeyError) as e:  # the network code changed since
+    raise PolicyError(f'checkpoint {where} does not fit the network of {config_path}: {e}'
+                      ) from None
+  return config, nnx.merge(trainer.graphdef, state.params), step
+
+
+def flat_params(model: networks.QNetwork) -> dict[str, np.ndarray]:
+  """`fcns/0/trunk/blocks/0/conv1/kernel` -> array: the NNX state path joined by '/'."""
+  out = {}
+
+  def walk(tree, prefix):
+    for k, v in tree.items():
+      if isinstance(v, dict):
+        walk(v, f'{prefix}{k}/')
+      else:
+        out[f'{prefix}{k}'] = np.asarray(v)
+
+  walk(nnx.to_pure_dict(nnx.state(model)), '')
+  return out
+
+
+def load_exported(folder) -> tuple[Config, networks.QNetwork, int]:
+  """(config, Q-network, step) from what `export` wrote: a trained policy without its training
+  state (replay, optimiser), small enough to ship, as `pretrained/` does.
+
+  Every parameter must be in params.npz with the shape the network of model.json's config
+  expects; otherwise the error names the arrays that differ.
+  """
+  folder = pathlib.Path(folder)
+  model_path, params_path = folder / 'model.json', folder / 'params.npz'
+  try:
+    described = json.loads(model_path.read_text())
+    if described.get('format') != FORMAT:
+      raise ValueError(f'format {described.get("format")!r}, expected {FORMAT!r}')
+    config = _config(described['config'], model_path)
+    step = int(described['source']['checkpoint_step'])
+    model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
+  except (OSError, ValueError, TypeError, KeyError, AttributeError) as e:
+    raise PolicyError(f'{model_path}: not an export of mvcoba_jax ({e})') from None
+  want = {n: a.shape for n, a in flat_params(model).items()}
+  try:
+    with np.load(params_path) as saved:
+      got = {n: saved[n] for n in saved.files}
+  except (OSError, ValueError) as e:
+    raise PolicyError(f'{params_path}: cannot read it ({e})') from None
+  problems = ([f'{n}: missing' for n in sorted(set(want) - set(got))]
+              + [f'{n}: not a parameter of this network' for n in sorted(set(got) - set(want))]
+              + [f'{n}: shape {got[n].shape}, the network needs {want[n]}'
+                 for n in sorted(set(want) & set(got)) if got[n].shape != want[n]])
+  if problems:
+    raise PolicyError(f'{params_path} does not fit the {config.network.method} network of '
+                      f'{model_path}:\n  ' + '\n  '.join(problems[:10]))
+
+  def filled(tree, prefix):
+    return {k: filled(v, f'{prefix}{k}/') if isinstance(v, dict)
+            else jnp.asarray(got[f'{prefix}{k}']) for k, v in tree.items()}
+
+  state = nnx.state(model)
+  nnx.replace_by_pure_dict(state, filled(nnx.to_pure_dict(state), ''))
+  nnx.update(model, state)
+  return config, model, step

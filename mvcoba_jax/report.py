@@ -1,0 +1,117 @@
+"""Evaluation results: per-method rows scored from per-run counts, the paper's tables in Markdown,
+results.json/results.md written atomically, and earlier results joined into one report."""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import pathlib
+
+from mvcoba_jax import metrics
+
+METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action efficiency (%)'),
+           ('completion', 'completion (%)'), ('objects_picked', 'objects picked (%)'),
+           ('grasp_to_push', 'grasp-to-push ratio'))
+
+
+class ResultsError(ValueError):
+  """An earlier evaluation's results.json that --tables cannot use."""
+
+
+
+def row_labels(directories: list[str], methods: list[str]) -> list[str]:
+  """Table rows of the checkpoints: the method, with the run's folder when a method repeats."""
+  repeated = {m for m in methods if methods.count(m) > 1}
+  return [f'{m} ({pathlib.Path(d).name})' if m in repeated else m
+          for d, m in zip(directories, methods)]
+
+
+
+def json_safe(tree):
+  """`tree` with NaN and infinities (undefined metrics) as null, which JSON can hold."""
+  if isinstance(tree, dict):
+    return {k: json_safe(v) for k, v in tree.items()}
+  return None if isinstance(tree, float) and not math.isfinite(tree) else tree
+
+
+
+def table(rows: dict[str, dict[str, dict]], key: str, label: str, cases: list[str]) -> str:
+  """A Markdown table: methods as rows, cases and their mean as columns ('-': undefined/not run)."""
+  head = f'| {label} | ' + ' | '.join(cases) + ' | mean |\n|---|' + '---|' * (len(cases) + 1)
+  lines = [head]
+  for method, result in rows.items():
+    cells = [result['cases'].get(c, {}).get(key, math.nan) for c in cases] + [result['mean'][key]]
+    lines.append(f'| {method} | ' + ' | '.join('-' if not math.isfinite(v) else f'{v:.1f}'
+                                                for v in cells) + ' |')
+  return '\n'.join(lines)
+
+
+
+def suite_tables(suite: str, rows: dict[str, dict]) -> list[str]:
+  """One Markdown table per metric of a suite; its columns are every case any method ran."""
+  cases = list(dict.fromkeys(c for result in rows.values() for c in result['cases']))
+  return [f'### {suite}: {label}\n\n' + table(rows, key, label, cases) for key, label in METRICS]
+
+
+
+def scored(by_case: dict[str, list[metrics.RunLog]], wall_s: float) -> dict:
+  """A method's row of a suite: metrics per case and their means, with the runs they came from."""
+  per_case = {name: metrics.case_metrics(logs) for name, logs in by_case.items()}
+  return {'cases': per_case, 'mean': metrics.suite_average(per_case), 'wall_s': wall_s,
+          'runs': {name: [dataclasses.asdict(log) for log in logs]
+                   for name, logs in by_case.items()}}
+
+
+
+def loss_summary(lost: list[dict]) -> str:
+  """One line on the objects that left the workspace (see `evaluation.losses`)."""
+  grasps = [r for r in lost if r['primitive'] == 'grasp']
+  return (f'{len(lost)} objects left the workspace ({len(grasps)} during grasps, '
+          f'{len(lost) - len(grasps)} during pushes; '
+          f'{sum(r["distance_to_gripper"] <= 0.03 for r in lost)} began within 3 cm of the '
+          f'gripper\'s target, {sum(r["margin_to_border"] <= 0.03 for r in lost)} within 3 cm of '
+          'the border): losses.json')
+
+
+
+def write_report(report: dict, out: pathlib.Path) -> str:
+  """Writes results.json and results.md (each replaced whole, never half written); the Markdown."""
+  text = '\n\n'.join(t for suite, rows in report.items() for t in suite_tables(suite, rows)) + '\n'
+  for name, content in (('results.json', json.dumps(json_safe(report), indent=1)),
+                        ('results.md', text)):
+    partial = out / f'.{name}.partial'
+    partial.write_text(content)
+    os.replace(partial, out / name)
+  return text
+
+
+
+def joined_report(folders: list[str]) -> dict:
+  """The results.json of earlier evaluations as one report, scored again from their runs.
+
+  A method met twice in a suite gets its --out folder's name after it.
+  """
+  report = {}
+  for folder in folders:
+    path = pathlib.Path(folder) / 'results.json'
+    try:
+      data = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError) as e:
+      raise ResultsError(f'{path}: cannot read evaluation results ({e})') from None
+    if not isinstance(data, dict) or not all(isinstance(rows, dict) for rows in data.values()):
+      raise ResultsError(f'{path}: not the results of mvcoba-eval (suite -> method -> results)')
+    for suite, rows in data.items():
+      for method, result in rows.items():
+        if not isinstance(result, dict) or 'runs' not in result:
+          raise ResultsError(f'{path}: {suite}/{method} holds no per-run counts (written '
+                              'before mvcoba-eval kept them); evaluate it again')
+        try:
+          by_case = {name: [metrics.RunLog(**log) for log in logs]
+                     for name, logs in result['runs'].items()}
+        except TypeError as e:
+          raise ResultsError(f'{path}: {suite}/{method}: a run log is malformed ({e})') from None
+        rows_here = report.setdefault(suite, {})
+        label = f'{method} ({pathlib.Path(folder).name})' if method in rows_here else method
+        rows_here[label] = scored(by_case, result.get('wall_s'))
+  return report

@@ -1,0 +1,58 @@
+"""What a training run writes to its work directory: one JSON record per action (actions.jsonl),
+their summary and the training curves (curves.png)."""
+from __future__ import annotations
+
+import json
+import pathlib
+
+import jax
+import numpy as np
+from jax.experimental import multihost_utils
+
+from mvcoba_jax import curves
+
+PRIMITIVE_NAMES = ('push', 'grasp')
+
+
+def action_records(log, first_action: int) -> list[dict]:
+  """One JSON record per action of a (K, B) StepLog, numbered over all environments."""
+  # With several processes each holds its own environments' part; gather the whole batch.
+  log = multihost_utils.process_allgather(log, tiled=True) if jax.process_count() > 1 \
+      else jax.tree.map(np.asarray, log)
+  k, b = log.primitive.shape
+  return [{'action': first_action + i * b + e, 'env': e,
+           'primitive': PRIMITIVE_NAMES[int(log.primitive[i, e])],
+           'grasp_success': bool(log.grasp_success[i, e]), 'changed': bool(log.changed[i, e]),
+           'reward': float(log.reward[i, e]), 'done': bool(log.done[i, e]),
+           'healthy': bool(log.healthy[i, e]), 'picked': int(log.picked[i, e]),
+           'lost': int(log.lost[i, e]), 'explored': bool(log.explored[i, e])}
+          for i in range(k) for e in range(b)]
+
+
+def read_records(path: pathlib.Path, below: int) -> list[dict]:
+  """Action records before action `below` (a resumed run drops what came after its checkpoint)."""
+  if not path.exists():
+    return []
+  return [r for r in map(json.loads, path.read_text().splitlines()) if r['action'] < below]
+
+
+def write_records(path: pathlib.Path, records: list[dict], mode: str) -> None:
+  with path.open(mode) as f:
+    f.writelines(json.dumps(r) + '\n' for r in records)
+
+
+def summary(records: list[dict]) -> dict:
+  grasps = [r for r in records if r['primitive'] == 'grasp']
+  success = sum(r['grasp_success'] for r in grasps)
+  return {'actions': len(records), 'grasp_attempts': len(grasps), 'grasp_successes': success,
+          'grasp_success': success / max(len(grasps), 1),
+          'action_efficiency': success / max(len(records), 1),
+          'pushes': len(records) - len(grasps)}
+
+
+def plot_curves(workdir: pathlib.Path, records: list[dict], config) -> pathlib.Path:
+  path = workdir / 'curves.png'
+  curves.plot([r['primitive'] == 'grasp' for r in records],
+              [r['grasp_success'] for r in records], config.train.curve_window, path,
+              title=f'{config.network.method}, {config.num_envs} tabletops')
+  return path

@@ -1,0 +1,52 @@
+"""The MJX backend: the whole simulation traced into the jitted program (the path for GPUs and
+TPUs; on a CPU it runs, 80-120x slower than the native backend, docs/design.md)."""
+from __future__ import annotations
+
+import contextlib
+import io
+import sys
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+# Without NVIDIA Warp (an optional MJX backend we do not use) importing mujoco.mjx prints two
+# "Failed to import warp" lines on stdout, where our scripts print JSON: they are dropped.
+with contextlib.redirect_stdout(io.StringIO()) as _printed:
+  from mujoco import mjx
+for _line in _printed.getvalue().splitlines():
+  if not _line.startswith(('Failed to import warp:', 'Failed to import mujoco_warp:')):
+    print(_line, file=sys.stderr)
+
+from mvcoba_jax.sim.physics import CAMERA_GROUPS, Parking, SimState  # noqa: E402
+from mvcoba_jax.sim.scene import Scene  # noqa: E402
+
+
+class MjxPhysics:
+  """MJX: the whole simulation is traced into the jitted program (the path for accelerators)."""
+
+  name = 'mjx'
+
+  def __init__(self, scene: Scene):
+    # This process's own device: jax.devices()[0], MJX's default, may belong to another process.
+    self.model = mjx.put_model(scene.mj_model, device=jax.local_devices()[0], impl='jax')
+    self._parking = Parking(scene)
+
+  def _data(self, sim: SimState) -> mjx.Data:
+    return mjx.make_data(self.model).replace(qpos=sim.qpos, qvel=sim.qvel,
+                                             mocap_pos=sim.mocap_pos, mocap_quat=sim.mocap_quat)
+
+  def simulate(self, sim: SimState, parked, ctrl) -> tuple[SimState, jnp.ndarray]:
+    """Steps one tabletop through `ctrl` (T, nu); returns the state and whether MuJoCo was
+    content (MJX raises no warnings: always True; the caller checks finiteness)."""
+    pin = self._parking.pin
+    def body(d, c):
+      return pin(mjx.step(self.model, d.replace(ctrl=c)), parked), None
+    data, _ = jax.lax.scan(body, self._data(sim), ctrl)
+    return sim.replace(qpos=data.qpos, qvel=data.qvel), jnp.bool_(True)
+
+  def cast(self, sim: SimState, origins: np.ndarray, directions: np.ndarray):
+    """Distance (P,) and geom id (P,) of every ray of one tabletop; -1 for a miss."""
+    data = mjx.kinematics(self.model, self._data(sim))
+    return jax.vmap(lambda p, v: mjx.ray(self.model, data, p, v, geomgroup=CAMERA_GROUPS))(
+        jnp.asarray(origins), jnp.asarray(directions))

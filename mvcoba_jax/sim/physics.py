@@ -1,0 +1,75 @@
+"""Physics backends behind one interface: MJX (JAX, accelerators) and native MuJoCo (C, CPUs).
+
+A backend steps a batch of tabletops through a control sequence and casts the cameras' rays, both
+as pure functions of a compact `SimState` that are jittable and vmappable; the environment above
+never branches on which backend runs. `scene.backend='auto'` picks native MuJoCo when JAX's
+default device is a CPU (MJX's physics and ray casting are 80-120x and about 80x slower there)
+and MJX on GPUs and TPUs.
+
+Out-of-play object slots come in at their parking spots (the environment puts them there after
+every call) and both backends keep them there: MJX pins their pose on every step; native MuJoCo
+switches on their gravity compensation, so they float at rest, touch nothing and cost nothing.
+"""
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import struct
+
+from mvcoba_jax.sim.config import ConfigError, SceneConfig
+from mvcoba_jax.sim.scene import GRIPPER_GROUP, Scene, park_position
+
+BACKENDS = ('auto', 'native', 'mjx')
+CAMERA_GROUPS = tuple(int(g != GRIPPER_GROUP) for g in range(6))
+
+
+@struct.dataclass
+class SimState:
+  """What the next physics call needs of one tabletop (float32; velocities at rest are ~0)."""
+  qpos: jnp.ndarray  # (nq,)
+  qvel: jnp.ndarray  # (nv,)
+  mocap_pos: jnp.ndarray  # (nmocap, 3): the occluders
+  mocap_quat: jnp.ndarray  # (nmocap, 4)
+
+
+def resolve_backend(scene: SceneConfig) -> str:
+  """'native' or 'mjx' for `scene.backend` ('auto': native on a CPU, MJX on an accelerator)."""
+  if scene.backend not in BACKENDS:
+    raise ConfigError(f'scene.backend={scene.backend!r}: allowed values are {", ".join(BACKENDS)}')
+  if scene.backend == 'auto':
+    return 'native' if jax.default_backend() == 'cpu' else 'mjx'
+  return scene.backend
+
+
+def initial_state(scene: Scene) -> SimState:
+  """The compiled model's own pose of everything: objects parked, gripper and occluders home."""
+  m = scene.mj_model
+  bodies = np.flatnonzero(m.body_mocapid >= 0)[np.argsort(m.body_mocapid[m.body_mocapid >= 0])]
+  return SimState(qpos=jnp.asarray(m.qpos0, jnp.float32), qvel=jnp.zeros(m.nv, jnp.float32),
+                  mocap_pos=jnp.asarray(m.body_pos[bodies], jnp.float32).reshape(-1, 3),
+                  mocap_quat=jnp.asarray(m.body_quat[bodies], jnp.float32).reshape(-1, 4))
+
+
+def parked_slot_qpos(scene: Scene) -> np.ndarray:
+  """(M, 7) free-joint pose of every object slot at its parking spot."""
+  return np.array([park_position(i) + (1.0, 0.0, 0.0, 0.0)
+                   for i in range(len(scene.index.slot_shapes))], np.float32)
+
+
+class Parking:
+  """Puts out-of-play object slots at their parking spots, at rest, in JAX."""
+
+  def __init__(self, scene: Scene):
+    idx = scene.index
+    self.qpos_idx = jnp.asarray(idx.slot_qpos[:, None] + np.arange(7))
+    self.qvel_idx = jnp.asarray(idx.slot_qvel[:, None] + np.arange(6))
+    self.park_qpos = jnp.asarray(parked_slot_qpos(scene))
+
+  def pin(self, state, parked):
+    """`state` (a SimState or an mjx.Data) with the `parked` (M,) slots parked."""
+    qpos = state.qpos.at[self.qpos_idx].set(
+        jnp.where(parked[:, None], self.park_qpos, state.qpos[self.qpos_idx]))
+    qvel = state.qvel.at[self.qvel_idx].set(
+        jnp.where(parked[:, None], 0.0, state.qvel[self.qvel_idx]))
+    return state.replace(qpos=qpos, qvel=qvel)

@@ -1,0 +1,224 @@
+"""The batched tabletop environment: pure `reset`, `reset_from_case` and `step` over a pytree state.
+
+Every function here works on one environment and is jittable; vmap it over B environments
+(`jax.vmap(env.step)`). The physics runs in the backend `scene.backend` picks (`envs/physics.py`:
+native MuJoCo on a CPU, MJX on an accelerator); nothing here depends on which. Object slots not
+in play wait at their parking spots, so they never touch anything and never count.
+"""
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+from flax import struct
+
+from mvcoba_jax.sim import cameras, physics, primitives, shapes
+from mvcoba_jax.sim.config import TabletopConfig
+from mvcoba_jax.sim.geometry import quat_mul, yaw_quat
+from mvcoba_jax.sim.physics import SimState
+from mvcoba_jax.sim.primitives import Action
+from mvcoba_jax.sim.scene import GRIPPER_PARK, Scene, build_scene
+
+PLACEMENT_TRIES = 16  # candidate spots per object and drop layer
+PLACEMENT_GAP = 0.004  # clearance between footprint circles of objects dropped in one layer
+
+
+@struct.dataclass
+class Layout:
+  """Where each object slot starts: a random drop or a test case (padded to the slot count)."""
+  in_play: jnp.ndarray  # (M,) bool
+  pos: jnp.ndarray  # (M, 3)
+  quat: jnp.ndarray  # (M, 4) w, x, y, z
+  color: jnp.ndarray  # (M, 3) RGB 0..1
+  occluder_pos: jnp.ndarray  # (K, 3)
+  occluder_quat: jnp.ndarray  # (K, 4)
+
+
+@struct.dataclass
+class EnvState:
+  sim: SimState
+  in_play: jnp.ndarray  # (M,) bool: on the table and not yet picked or lost
+  color: jnp.ndarray  # (M, 3)
+  picked: jnp.ndarray  # int32: objects picked this episode
+  lost: jnp.ndarray  # int32: objects that left the workspace this episode
+  healthy: jnp.ndarray  # bool: physics finite and not exploded after the last reset/step
+  health_resets: jnp.ndarray  # int32: times this environment was reset for bad physics
+  key: jnp.ndarray
+
+
+@struct.dataclass
+class StepInfo:
+  grasp_success: jnp.ndarray  # bool
+  picked: jnp.ndarray  # int32: objects removed by this grasp
+  lost: jnp.ndarray  # int32: objects that left the workspace during this step
+  left_workspace: jnp.ndarray  # (M,) bool: which objects those were
+  healthy: jnp.ndarray  # bool
+
+
+def where_envs(mask, new, old):
+  """Per-environment choice between two batched pytrees: `new` where `mask` (B,) holds."""
+  return jax.tree.map(
+      lambda a, b: jnp.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b), new, old)
+
+
+def make_backend(scene: Scene):
+  """The backend `scene.config.backend` names, for this compiled scene. Each is imported when
+  chosen: a process on the native backend never imports MJX, and one on MJX starts no C threads."""
+  if physics.resolve_backend(scene.config) == 'native':
+    from mvcoba_jax.sim.native import NativePhysics  # noqa: PLC0415
+    return NativePhysics(scene)
+  from mvcoba_jax.sim.mjx_physics import MjxPhysics  # noqa: PLC0415
+  return MjxPhysics(scene)
+
+
+class Tabletop:
+  """Static description of the environment; its methods are pure functions of the state."""
+
+  def __init__(self, config: TabletopConfig):
+    self.config = config
+    self.scene = build_scene(config.scene)
+    self.backend = make_backend(self.scene)
+    self._parking = physics.Parking(self.scene)
+    self.camera_rays = cameras.world_rays(self.scene.mj_model, config.scene.cameras)
+    idx = self.scene.index
+    self.num_slots = len(idx.slot_shapes)
+    if config.env.num_objects > self.num_slots:
+      raise ValueError(f'env.num_objects={config.env.num_objects} exceeds the '
+                       f'{self.num_slots} object slots of scene.pool')
+    self.script = primitives.make_script(config.env, config.scene.timestep)
+    self._qpos_idx = self._parking.qpos_idx
+    self._grip_qpos = jnp.asarray(idx.gripper_qpos)
+    self._grip_qvel = jnp.asarray(idx.gripper_qvel)
+    self._park_qpos = self._parking.park_qpos
+    self._gripper_park = jnp.array(GRIPPER_PARK + (0.0, primitives.FINGER_OPEN,
+                                                   primitives.FINGER_OPEN), jnp.float32)
+    slot_shapes = [shapes.SHAPES[s] for s in idx.slot_shapes]
+    self._rest_quat = jnp.asarray([s.rest_quat for s in slot_shapes], jnp.float32)
+    self._rest_half_height = jnp.asarray([0.5 * s.rest_extent[2] for s in slot_shapes],
+                                         jnp.float32)
+    self._radius = jnp.asarray([shapes.footprint_radius(s.name) for s in slot_shapes],
+                               jnp.float32)
+
+  # ----------------------------------------------------------------------------- physics core
+  def _place_gripper(self, sim: SimState, pose) -> SimState:
+    """Puts the gripper at `pose` (x, y, z, yaw, fingers), at rest."""
+    return sim.replace(qpos=sim.qpos.at[self._grip_qpos].set(pose),
+                       qvel=sim.qvel.at[self._grip_qvel].set(0.0))
+
+  def _simulate(self, sim: SimState, in_play, ctrl) -> tuple[SimState, jnp.ndarray]:
+    """Steps through the actuator targets `ctrl` (T, 6); also whether the physics stayed sound."""
+    sim, ok = self.backend.simulate(sim, ~in_play, ctrl)
+    return sim, ok & self._health(sim)
+
+  def _health(self, sim: SimState):
+    finite = jnp.all(jnp.isfinite(sim.qpos)) & jnp.all(jnp.isfinite(sim.qvel))
+    return finite & (jnp.max(jnp.abs(sim.qvel)) < self.config.env.max_qvel)
+
+  def _in_workspace(self, sim: SimState):
+    pos = sim.qpos[self._qpos_idx[:, :3]]
+    h = self.config.scene.workspace_half
+    return (jnp.abs(pos[:, 0]) <= h) & (jnp.abs(pos[:, 1]) <= h) & (pos[:, 2] > -0.05)
+
+  def _finish(self, sim: SimState, in_play) -> SimState:
+    """Parks the gripper and the objects out of play."""
+    return self._parking.pin(self._place_gripper(sim, self._gripper_park), ~in_play)
+
+  # ----------------------------------------------------------------------------- reset
+  def sample_layout(self, key) -> Layout:
+    """A random drop of `env.num_objects` objects: greedy non-overlapping spots in stacked layers.
+
+    Objects that do not fit beside the others go to a layer `layer_height` higher and fall onto
+    the pile while the scene settles, as sequential drops would.
+    """
+    env, m = self.config.env, self.num_slots
+    n = env.num_objects
+    layers = 1 + n // 4
+    k_perm, k_place, k_yaw, k_color = jax.random.split(key, 4)
+    order = jax.random.permutation(k_perm, m)
+    in_play = jnp.zeros(m, bool).at[order[:n]].set(True)
+    lim = self.config.scene.workspace_half - env.drop_margin
+    cands = jax.random.uniform(k_place, (n, layers * PLACEMENT_TRIES, 2), minval=-lim, maxval=lim)
+    cand_layer = jnp.repeat(jnp.arange(layers), PLACEMENT_TRIES)
+
+    def place(i, carry):
+      xy, layer, placed = carry
+      s = order[i]
+      dist = jnp.linalg.norm(cands[i][:, None, :] - xy[None], axis=-1)
+      clash = placed[None] & (layer[None] == cand_layer[:, None]) & (
+          dist < self._radius[s] + self._radius[None] + PLACEMENT_GAP)
+      free = ~jnp.any(clash, axis=1)
+      j = jnp.where(jnp.any(free), jnp.argmax(free), free.shape[0] - 1)
+      return xy.at[s].set(cands[i, j]), layer.at[s].set(cand_layer[j]), placed.at[s].set(True)
+
+    xy, layer, _ = jax.lax.fori_loop(
+        0, n, place, (jnp.zeros((m, 2)), jnp.zeros(m, jnp.int32), jnp.zeros(m, bool)))
+    z = self._rest_half_height + 0.002 + layer * env.layer_height
+    pos = jnp.where(in_play[:, None], jnp.concatenate([xy, z[:, None]], axis=1),
+                    self._park_qpos[:, :3])
+    yaw = jax.random.uniform(k_yaw, (m,), maxval=2 * jnp.pi)
+    quat = quat_mul(yaw_quat(yaw), self._rest_quat)
+    color = jnp.asarray(shapes.COLORS)[jax.random.permutation(k_color, jnp.arange(m) % 10)]
+    occluder_pos, occluder_quat = self.parked_occluders()
+    return Layout(in_play=in_play, pos=pos, quat=quat, color=color,
+                  occluder_pos=occluder_pos, occluder_quat=occluder_quat)
+
+  def parked_occluders(self):
+    """Poses of the occluder slots when a layout uses none of them: at their model positions."""
+    sim, mocap = physics.initial_state(self.scene), self.scene.index.occluder_mocap
+    return sim.mocap_pos[mocap], sim.mocap_quat[mocap]
+
+  def reset(self, key) -> EnvState:
+    """Drops `env.num_objects` random objects and lets them settle."""
+    key, k_layout = jax.random.split(key)
+    return self.reset_from_case(self.sample_layout(k_layout), key)
+
+  def place(self, layout: Layout, key=None) -> EnvState:
+    """The objects of `layout` exactly where it puts them, without physics (for pictures)."""
+    if key is None:
+      key = jax.random.PRNGKey(0)
+    sim = physics.initial_state(self.scene)
+    qpos = sim.qpos.at[self._qpos_idx].set(
+        jnp.where(layout.in_play[:, None], jnp.concatenate([layout.pos, layout.quat], 1),
+                  self._park_qpos))
+    mocap = self.scene.index.occluder_mocap
+    sim = sim.replace(qpos=qpos, mocap_pos=sim.mocap_pos.at[mocap].set(layout.occluder_pos),
+                      mocap_quat=sim.mocap_quat.at[mocap].set(layout.occluder_quat))
+    return EnvState(sim=self._finish(sim, layout.in_play), in_play=layout.in_play,
+                    color=layout.color, picked=jnp.int32(0), lost=jnp.int32(0),
+                    healthy=self._health(sim), health_resets=jnp.int32(0), key=key)
+
+  def reset_from_case(self, layout: Layout, key=None) -> EnvState:
+    """Places the objects of `layout` (a test case or a random drop) and lets them settle."""
+    state = self.place(layout, key)
+    hold = jnp.broadcast_to(self._gripper_park, (self.config.env.settle_steps, 6))
+    sim, healthy = self._simulate(state.sim, state.in_play, hold)
+    in_play = state.in_play & self._in_workspace(sim)
+    return state.replace(sim=self._finish(sim, in_play), in_play=in_play, healthy=healthy)
+
+  # ----------------------------------------------------------------------------- step
+  def step(self, state: EnvState, action: Action) -> tuple[EnvState, StepInfo]:
+    """Executes one primitive and does the bookkeeping of picked and lost objects."""
+    env = self.config.env
+    sim = self._place_gripper(state.sim, primitives.start_pose(action, env))
+    z_before = sim.qpos[self._qpos_idx[:, 2]]
+    ctrl = jax.vmap(lambda t: primitives.target(self.script, action, env, t))(
+        jnp.arange(self.script.length))
+    sim, healthy = self._simulate(sim, state.in_play, ctrl)
+
+    z_after = sim.qpos[self._qpos_idx[:, 2]]
+    fingers = sim.qpos[self._grip_qpos[4:]]
+    holding = jnp.sum(fingers) > 0.003  # fingers stopped on something: not closed fully
+    risen = state.in_play & (z_after - z_before > 0.5 * env.lift_height)
+    picked = risen & holding & (action.primitive == primitives.GRASP)
+    lost = state.in_play & ~picked & ~self._in_workspace(sim)
+    in_play = state.in_play & ~picked & ~lost
+    info = StepInfo(grasp_success=jnp.any(picked), picked=jnp.sum(picked, dtype=jnp.int32),
+                    lost=jnp.sum(lost, dtype=jnp.int32), left_workspace=lost, healthy=healthy)
+    state = state.replace(sim=self._finish(sim, in_play), in_play=in_play,
+                          picked=state.picked + info.picked, lost=state.lost + info.lost,
+                          healthy=healthy)
+    return state, info
+
+  # ----------------------------------------------------------------------------- queries
+  def object_positions(self, state: EnvState):
+    """(M, 3) centre of every slot of one environment (parked slots report their parking spot)."""
+    return state.sim.qpos[self._qpos_idx[:, :3]]
