@@ -83,7 +83,10 @@ class Checkpoints:
 
   def meta(self, step: int | None = None) -> dict:
     step = self._step(step)
-    return self.manager.restore(step, args=ocp.args.Composite(meta=ocp.args.JsonRestore()))['meta']
+    meta = self._read(step, meta=ocp.args.JsonRestore())['meta']
+    if not isinstance(meta, dict) or not isinstance(meta.get('config'), dict):
+      raise CheckpointError(f'checkpoint {self.directory / str(step)}: its meta holds no config')
+    return meta
 
   def restore(self, like, config, step: int | None = None):
     """(state, meta) of `step` (default: the latest), checked against `config` first."""
@@ -94,11 +97,20 @@ class Checkpoints:
       raise CheckpointError(f'checkpoint {self.directory / str(step)} was written by a run of '
                             'another shape; it cannot be resumed here:\n  ' + '\n  '.join(problems))
     abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, _leaves(like))
-    restored = self.manager.restore(
-        step, args=ocp.args.Composite(state=ocp.args.StandardRestore(abstract)))['state']
+    restored = self._read(step, state=ocp.args.StandardRestore(abstract))['state']
     leaves, treedef = jax.tree.flatten(like)
     return jax.tree.unflatten(treedef, [restored.get(_name(i), leaf)
                                         for i, leaf in enumerate(leaves)]), meta
+
+  def _read(self, step: int, **items):
+    """Orbax's restore of `items`; whatever is wrong with the files becomes one CheckpointError
+    naming the step folder (Orbax raises many kinds for missing, truncated or garbled files)."""
+    try:
+      return self.manager.restore(step, args=ocp.args.Composite(**items))
+    except Exception as e:  # noqa: BLE001
+      problem = str(e).splitlines()[0][:200] if str(e) else ''
+      raise CheckpointError(f'checkpoint {self.directory / str(step)} cannot be read: '
+                            f'{type(e).__name__}: {problem}') from None
 
   def _step(self, step):
     step = self.latest() if step is None else step

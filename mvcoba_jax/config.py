@@ -10,13 +10,26 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import importlib.util
+import math
 import pathlib
+import re
 import typing
 
-from mvcoba_jax.sim.config import CameraConfig, ConfigError, EnvConfig, SceneConfig
+from mvcoba_jax import methods
+from mvcoba_jax.sim.config import (
+  Between,
+  CameraConfig,
+  ConfigError,
+  EnvConfig,
+  SceneConfig,
+  check,
+)
 
 __all__ = ['CameraConfig', 'Config', 'ConfigError', 'EnvConfig', 'NetworkConfig',
            'PerceptionConfig', 'SceneConfig', 'TrainConfig']
+
+
+TRUNKS = ('small', 'densenet121')
 
 
 @dataclasses.dataclass(frozen=True)
@@ -29,6 +42,11 @@ class PerceptionConfig:
   change_min: float = 0.01
   change_max: float = 0.3
 
+  def __post_init__(self):
+    check(self, 'perception.', {'heightmap_resolution': Between(0.0005, 0.05),
+                                'change_area': Between(0, 1, low_open=True),
+                                'change_min': Between(0, 1), 'change_max': Between(0, 1)})
+
 
 @dataclasses.dataclass(frozen=True)
 class NetworkConfig:
@@ -38,6 +56,12 @@ class NetworkConfig:
   stem_patch: int = 4  # the stem turns patch x patch cells into one feature vector
   features: tuple[int, ...] = (32, 64, 64)  # channels of the trunk stages (small trunk)
   groups: int = 8  # GroupNorm groups
+
+  def __post_init__(self):
+    check(self, 'network.', {'trunk': TRUNKS, 'stem_patch': Between(1, 16),
+                             'features': Between(1, 4096), 'groups': Between(1, 512)})
+    if not self.features:
+      raise ConfigError('network.features: at least one stage')
 
 
 @dataclasses.dataclass(frozen=True)
@@ -61,6 +85,18 @@ class TrainConfig:
   checkpoint_every: int = 25  # host iterations between checkpoints
   curve_window: int = 200  # attempts in the sliding window of the training curves
 
+  def __post_init__(self):
+    check(self, 'train.', {
+        'total_actions': Between(1, 10 ** 9), 'steps_per_iteration': Between(1, 10000),
+        'learning_rate': Between(0, 1, low_open=True), 'momentum': Between(0, 0.999),
+        'weight_decay': Between(0, 0.1), 'gamma': Between(0, 0.999),
+        'huber_delta': Between(0, 100, low_open=True), 'epsilon_start': Between(0, 1),
+        'epsilon_end': Between(0, 1), 'epsilon_decay_actions': Between(1, 10 ** 9),
+        'explore_min_height': Between(0, 0.4), 'replay_capacity': Between(1, 10 ** 7),
+        'batch_size': Between(1, 4096), 'priority_exponent': Between(0, 10),
+        'target_update_period': Between(1, 10 ** 9), 'checkpoint_every': Between(1, 10 ** 9),
+        'curve_window': Between(1, 10 ** 7)})
+
 
 @dataclasses.dataclass(frozen=True)
 class Config:
@@ -71,6 +107,65 @@ class Config:
   train: TrainConfig = TrainConfig()
   num_envs: int = 8
   seed: int = 0
+
+  def __post_init__(self):
+    check(self, '', {'num_envs': Between(1, 65536), 'seed': Between(0, 2 ** 31 - 1)})
+
+
+REPLAY_LIMIT_BYTES = 16 * 2 ** 30  # a replay above this is refused: no CPU here holds it twice
+ACTIVATION_LIMIT_BYTES = 32 * 2 ** 30  # rough size of one acting forward's feature maps
+DENSENET_GROWTH = 32  # channels each DenseNet layer adds: GroupNorm's groups must divide it
+
+
+def validate(config: Config) -> Config:
+  """Raises ConfigError when fields that are each valid do not fit together; returns `config`.
+
+  `resolve` and `from_dict` call it, after every override is in (so overrides can come in any
+  order); the fields themselves are checked when each dataclass is built.
+  """
+  scene, env, net, train = config.scene, config.env, config.network, config.train
+  if env.num_objects > scene.num_slots:
+    raise ConfigError(f'env.num_objects={env.num_objects} exceeds the {scene.num_slots} object '
+                      f'slots of scene.pool; lower it or add slots to scene.pool')
+  cells = 2 * scene.workspace_half / config.perception.heightmap_resolution
+  side = round(cells)
+  if abs(cells - side) > 1e-6 * cells or side < 8 or side > 4096:
+    raise ConfigError(
+        f'perception.heightmap_resolution={config.perception.heightmap_resolution!r} must tile '
+        f'the workspace (2 x scene.workspace_half = {2 * scene.workspace_half:g} m) in a whole '
+        f'number of cells between 8 and 4096; it gives {cells:g}')
+  if config.perception.change_min >= config.perception.change_max:
+    raise ConfigError(f'perception.change_min={config.perception.change_min!r} must be below '
+                      f'perception.change_max={config.perception.change_max!r}')
+  if train.epsilon_end > train.epsilon_start:
+    raise ConfigError(f'train.epsilon_end={train.epsilon_end!r} must not exceed '
+                      f'train.epsilon_start={train.epsilon_start!r}')
+  widths = (DENSENET_GROWTH,) if net.trunk == 'densenet121' else net.features
+  if any(w % net.groups for w in widths):
+    raise ConfigError(f'network.groups={net.groups} must divide every channel count of the '
+                      f'{net.trunk} trunk ({", ".join(map(str, widths))}: network.features)')
+  if net.method not in methods.names():
+    raise ConfigError(f'network.method={net.method!r}: allowed values are '
+                      f'{", ".join(methods.names())}')
+  views = methods.get(net.method).views
+  if max(views) >= len(scene.cameras):
+    raise ConfigError(f'network.method={net.method!r} reads camera views {views}; '
+                      f'scene.cameras holds {len(scene.cameras)}')
+  num_views = len(scene.cameras)
+  replay = train.replay_capacity * 2 * num_views * side ** 2 * 5  # obs and next obs: uint8 colour + float16 depth
+  if replay > REPLAY_LIMIT_BYTES:
+    raise ConfigError(f'train.replay_capacity={train.replay_capacity} at {side} x {side} cells '
+                      f'and {num_views} views needs {replay / 2 ** 30:.1f} GiB of replay; the '
+                      f'limit is {REPLAY_LIMIT_BYTES / 2 ** 30:g} GiB')
+  stem = max(side // (4 if net.trunk == 'densenet121' else net.stem_patch), 1)
+  acting = (config.num_envs * env.num_rotations * stem ** 2 * max(net.features + (64,)) * 4
+            * (len(net.features) + 2))
+  if acting > ACTIVATION_LIMIT_BYTES:
+    raise ConfigError(f'num_envs={config.num_envs} x env.num_rotations={env.num_rotations} at '
+                      f'{side} x {side} cells needs about {acting / 2 ** 30:.0f} GiB of feature '
+                      f'maps per acting forward; the limit is '
+                      f'{ACTIVATION_LIMIT_BYTES / 2 ** 30:g} GiB')
+  return config
 
 
 PRESETS = ('default', 'paper', 'tiny')  # modules of mvcoba_jax.presets
@@ -92,31 +187,57 @@ def load_preset(preset: str | pathlib.Path) -> Config:
       raise ConfigError(f'config preset {path}: {type(e).__name__}: {e}') from None
   if not hasattr(module, 'get_config'):
     raise ConfigError(f'config preset {preset} defines no get_config()')
-  return module.get_config()
+  config = module.get_config()
+  if not isinstance(config, Config):
+    raise ConfigError(f'config preset {preset}: get_config() returned {type(config).__name__}, '
+                      'not a mvcoba_jax.config.Config')
+  return config
+
+
+_INT = re.compile(r'[+-]?[0-9]{1,20}')
+_FLOAT = re.compile(r'[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]{1,3})?')
 
 
 def _parse(text: str, tp, key: str):
-  origin = typing.get_origin(tp)
-  try:
-    if tp is bool:
-      if text.lower() not in ('true', 'false', '1', '0'):
-        raise ValueError(text)
-      return text.lower() in ('true', '1')
-    if tp in (int, float, str):
-      return tp(text)
-    if origin is tuple:
-      args = typing.get_args(tp)
-      if args == (tuple[str, int], Ellipsis):  # pool: 'cube:3,disk:1'
-        return tuple((name, int(n)) for name, n in (item.split(':') for item in text.split(',')))
-      if len(args) == 2 and args[1] is Ellipsis:
-        return tuple(_parse(t, args[0], key) for t in text.split(',') if t)
-      parts = text.split(',')
-      if len(parts) != len(args):
-        raise ValueError(f'expected {len(args)} comma-separated values')
-      return tuple(_parse(t, a, key) for t, a in zip(parts, args))
-  except ValueError as e:
-    raise ConfigError(f'override {key}={text!r}: cannot parse as {tp}: {e}') from None
-  raise ConfigError(f'override {key}: fields of type {tp} cannot be set from the command line')
+  """`text` as a value of type `tp`; ASCII numbers only, nan and inf refused. Sequences are
+  comma-separated; the pool is `shape:count,...`, the occluders `hx:hy:hz,...`."""
+  def fail(why: str):
+    return ConfigError(f'override {key}={text!r}: {why}')
+
+  if tp is bool:
+    if text.lower() not in ('true', 'false', '1', '0'):
+      raise fail('expected true or false')
+    return text.lower() in ('true', '1')
+  if tp is int:
+    if not _INT.fullmatch(text):
+      raise fail('expected an integer')
+    return int(text)
+  if tp is float:
+    if not _FLOAT.fullmatch(text) or not math.isfinite(float(text)):
+      raise fail('expected a finite number')
+    return float(text)
+  if tp is str:
+    return text
+  args = typing.get_args(tp) if typing.get_origin(tp) is tuple else ()
+  if args == (tuple[str, int], Ellipsis):  # scene.pool
+    items = [item.split(':') for item in text.split(',')]
+    if not all(len(item) == 2 and _INT.fullmatch(item[1]) for item in items):
+      raise fail('expected shape:count[,shape:count...], e.g. cube:3,disk:1')
+    return tuple((name, _parse(n, int, key)) for name, n in items)
+  if args == (tuple[float, float, float], Ellipsis):  # scene.occluders
+    items = [item.split(':') for item in text.split(',')]
+    if not all(len(item) == 3 for item in items):
+      raise fail('expected hx:hy:hz[,hx:hy:hz...] (half sizes, m)')
+    return tuple(tuple(_parse(v, float, key) for v in item) for item in items)
+  if len(args) == 2 and args[1] is Ellipsis and not dataclasses.is_dataclass(args[0]):
+    return tuple(_parse(t, args[0], key) for t in text.split(',') if t)
+  if args and Ellipsis not in args:
+    parts = text.split(',')
+    if len(parts) != len(args):
+      raise fail(f'expected {len(args)} comma-separated values')
+    return tuple(_parse(t, a, key) for t, a in zip(parts, args))
+  raise ConfigError(f'override {key}: this field cannot be set from the command line; '
+                    'write a preset file')
 
 
 def override(config, assignment: str):
@@ -151,7 +272,7 @@ def resolve(preset: str | pathlib.Path | None, overrides: typing.Sequence[str] =
   config = load_preset(preset)
   for assignment in overrides:
     config = override(config, assignment)
-  return config
+  return validate(config)
 
 
 def to_dict(config) -> dict:
@@ -164,13 +285,16 @@ def from_dict(data: dict, cls=Config, where: str = 'config'):
   Missing fields keep their defaults, so older config.json files still load (`defaulted` names
   them); unknown ones fail.
   """
+  if not isinstance(data, dict):
+    raise ConfigError(f'{where}: expected an object of {cls.__name__} fields, got {data!r:.60}')
   fields = {f.name for f in dataclasses.fields(cls)}
   data = {k: v for k, v in data.items() if k not in RETIRED.get(cls, ())}
   unknown = sorted(set(data) - fields)
   if unknown:
     raise ConfigError(f'{where}: unknown keys {", ".join(unknown)} for {cls.__name__}')
   hints = typing.get_type_hints(cls)
-  return cls(**{k: _value(v, hints[k], f'{where}.{k}') for k, v in data.items()})
+  config = cls(**{k: _value(v, hints[k], f'{where}.{k}') for k, v in data.items()})
+  return validate(config) if cls is Config else config
 
 
 # Fields that saved configs may hold and that no longer exist: dropped when read. The training
@@ -200,6 +324,8 @@ def _value(value, tp, where: str):
   if dataclasses.is_dataclass(tp):
     return from_dict(value, tp, where)
   if typing.get_origin(tp) is tuple:
+    if not isinstance(value, (list, tuple)):
+      raise ConfigError(f'{where}={value!r:.60}: expected a list')
     args = typing.get_args(tp)
     if len(args) == 2 and args[1] is Ellipsis:
       args = (args[0],) * len(value)

@@ -21,6 +21,7 @@ from mvcoba_jax import agent, networks, perception, task
 from mvcoba_jax.config import Config
 from mvcoba_jax.metrics import RunLog
 from mvcoba_jax.sim.geometry import pixel_to_world, quat_mul, yaw_quat
+from mvcoba_jax.sim.scenarios import case_to_layout, overlaps
 from mvcoba_jax.sim.tabletop import Layout, Tabletop, where_envs
 
 POSITION_NOISE = 0.002  # m, per axis, on each object's start position
@@ -213,6 +214,17 @@ def suite_config(config, pool):
                               max_geom_pairs=max(config.scene.max_geom_pairs, 2 * slots))
   env = dataclasses.replace(config.env, num_objects=min(config.env.num_objects, slots))
   return dataclasses.replace(config, scene=scene, env=env)
+
+
+def case_problems(cases, config) -> list[str]:
+  """Objects of `cases` that interpenetrate as placed, in the scene a suite of them gets; raises
+  ScenarioError for a case that does not fit it (occluder slots)."""
+  env = Tabletop(suite_config(config, pool_for(cases)))
+  problems = []
+  for case in cases:
+    case_to_layout(case, env)
+    problems += overlaps(case, env)
+  return problems
 
 
 def make_policy(method_source, config):

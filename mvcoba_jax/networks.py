@@ -19,7 +19,7 @@ import optax
 from flax import nnx
 
 from mvcoba_jax import methods
-from mvcoba_jax.config import NetworkConfig
+from mvcoba_jax.config import DENSENET_GROWTH, NetworkConfig
 from mvcoba_jax.sim.geometry import rotate_images, rotation_angle
 from mvcoba_jax.sim.primitives import GRASP, PUSH
 
@@ -31,9 +31,7 @@ INPUT_NORMALISATION = {
 }
 NO_ACTION = -1e9  # Q of a primitive a method cannot execute: max-Q never picks it
 
-TRUNKS = ('small', 'densenet121')
 DENSENET121_BLOCKS = (6, 12, 24, 16)
-DENSENET_GROWTH = 32
 
 
 def views_used(method: str) -> tuple[int, ...]:
@@ -228,8 +226,6 @@ class QNetwork(nnx.Module):
 def build_network(config: NetworkConfig, num_rotations: int, rngs: nnx.Rngs) -> QNetwork:
   """The Q-network of `config.method` with the `config.trunk` backbone."""
   methods.get(config.method)
-  if config.trunk not in TRUNKS:
-    raise ValueError(f'unknown network trunk {config.trunk!r}; allowed: {", ".join(TRUNKS)}')
   return QNetwork(config.method, config, num_rotations, rngs)
 
 

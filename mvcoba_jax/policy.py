@@ -64,7 +64,10 @@ def load(workdir) -> tuple[Config, networks.QNetwork, int]:
   if step is None:
     raise PolicyError(f'no checkpoint in {checkpoints.directory}')
   where = checkpoints.directory / str(step)
-  problems = incompatibilities(checkpoints.meta(step)['config'], config_lib.to_dict(config))
+  try:
+    problems = incompatibilities(checkpoints.meta(step)['config'], config_lib.to_dict(config))
+  except CheckpointError as e:
+    raise PolicyError(str(e)) from None
   if problems:
     raise PolicyError(f'{config_path} does not match checkpoint {where}:\n  '
                       + '\n  '.join(problems))
@@ -75,9 +78,16 @@ def load(workdir) -> tuple[Config, networks.QNetwork, int]:
   like = jax.eval_shape(trainer.init, jax.random.PRNGKey(config.seed))
   try:
     state, _ = checkpoints.restore(like, config, step)
-  except (CheckpointError, ValueError, KeyError) as e:  # the network code changed since
+  except CheckpointError as e:
+    raise PolicyError(str(e)) from None
+  except (ValueError, KeyError) as e:  # the network code changed since
     raise PolicyError(f'checkpoint {where} does not fit the network of {config_path}: {e}'
                       ) from None
+  bad = [n for n, a in flat_params(nnx.merge(trainer.graphdef, state.params)).items()
+         if not np.isfinite(a).all()]
+  if bad:
+    raise PolicyError(f'checkpoint {where}: parameters hold NaN or infinite values '
+                      f'({", ".join(bad[:3])}{", ..." if len(bad) > 3 else ""})')
   return config, nnx.merge(trainer.graphdef, state.params), step
 
 
@@ -113,17 +123,23 @@ def load_exported(folder) -> tuple[Config, networks.QNetwork, int]:
     step = int(described['source']['checkpoint_step'])
     model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
   except (OSError, ValueError, TypeError, KeyError, AttributeError) as e:
-    raise PolicyError(f'{model_path}: not an export of mvcoba_jax ({e})') from None
-  want = {n: a.shape for n, a in flat_params(model).items()}
+    raise PolicyError(f'{model_path}: not an export of mvcoba_jax ({type(e).__name__}: {e})'
+                      ) from None
+  want = {n: (a.shape, a.dtype) for n, a in flat_params(model).items()}
   try:
-    with np.load(params_path) as saved:
+    with np.load(params_path, allow_pickle=False) as saved:
       got = {n: saved[n] for n in saved.files}
-  except (OSError, ValueError) as e:
-    raise PolicyError(f'{params_path}: cannot read it ({e})') from None
+  except Exception as e:  # noqa: BLE001 (a damaged zip raises BadZipFile, EOFError, zlib.error...)
+    raise PolicyError(f'{params_path}: cannot read it: {type(e).__name__}: {e}') from None
+  both = sorted(set(want) & set(got))
   problems = ([f'{n}: missing' for n in sorted(set(want) - set(got))]
               + [f'{n}: not a parameter of this network' for n in sorted(set(got) - set(want))]
-              + [f'{n}: shape {got[n].shape}, the network needs {want[n]}'
-                 for n in sorted(set(want) & set(got)) if got[n].shape != want[n]])
+              + [f'{n}: shape {got[n].shape}, the network needs {want[n][0]}'
+                 for n in both if got[n].shape != want[n][0]]
+              + [f'{n}: dtype {got[n].dtype}, the network needs {want[n][1]}'
+                 for n in both if got[n].dtype != want[n][1]]
+              + [f'{n}: holds NaN or infinite values' for n in both
+                 if got[n].dtype == want[n][1] and not np.isfinite(got[n]).all()])
   if problems:
     raise PolicyError(f'{params_path} does not fit the {config.network.method} network of '
                       f'{model_path}:\n  ' + '\n  '.join(problems[:10]))

@@ -90,7 +90,7 @@ def test_wheel_carries_presets_suites_and_entry_points(tmp_path):
                for n in names) == count, suite
   assert sum(n.startswith('mvcoba_jax/suites/vpg/test-10-obj-') for n in names) == 11
   assert {'mvcoba_jax/presets/default.py', 'mvcoba_jax/presets/tiny.py',
-          'mvcoba_jax/sim/tabletop.py', 'mvcoba_jax/suites/vpg/LICENSE-vpg.txt'} <= set(names)
+          'mvcoba_jax/sim/tabletop.py', 'mvcoba_jax/suites/vpg/LICENSE-vpg'} <= set(names)
   assert not any(n.startswith(('tests/', 'benchmarks/')) for n in names)
   entry_points = next(n for n in names if n.endswith('entry_points.txt'))
   text = zipfile.ZipFile(wheel).read(entry_points).decode()

@@ -1,5 +1,8 @@
 """The jitted training step, the learner, and mvcoba-train end to end on the tiny preset."""
 import json
+import signal
+import subprocess
+import sys
 import time
 
 import jax
@@ -134,5 +137,37 @@ def test_resume_without_a_checkpoint_fails_at_once_and_creates_nothing(tmp_path,
 def test_a_config_that_cannot_be_built_fails_before_the_work_directory_exists(
     tmp_path, capsys, override, named):
   workdir = tmp_path / 'run'
-  assert run(workdir, '--set', override) == 2
+  with pytest.raises(SystemExit) as exit_:  # argparse's usage error
+    run(workdir, '--set', override)
+  assert exit_.value.code == 2
   assert not workdir.exists() and named in capsys.readouterr().err
+
+
+def test_sigkill_while_writing_a_checkpoint_loses_nothing_older(tmp_path):
+  """A run killed while Orbax writes checkpoint 8 resumes from checkpoint 4 and ends exactly as a
+  run that was never interrupted."""
+  straight, killed = tmp_path / 'straight', tmp_path / 'killed'
+  extra = ['--set', 'train.total_actions=12']
+  assert run(straight, *extra) == 0
+  command = [sys.executable, '-m', 'mvcoba_jax.cli.train', '--config', TINY, '--workdir',
+             str(killed), '--eval-actions', '2', *extra]
+  process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+  folder, caught = killed / 'checkpoints', None
+  deadline = time.monotonic() + 600
+  while process.poll() is None and time.monotonic() < deadline and caught is None:
+    names = [p.name for p in folder.iterdir()] if folder.is_dir() else []
+    caught = next((n for n in names if n.startswith('8') and not n.isdigit()), None)
+  process.send_signal(signal.SIGKILL)
+  process.wait()
+  assert caught, f'the run ended before checkpoint 8 was being written: {names}'
+  assert not (folder / '8').is_dir() and (folder / '4').is_dir()
+  assert run(killed, '--resume', *extra) == 0
+  like = jax.jit(Trainer(resolve(TINY)).init)(jax.random.PRNGKey(1))
+  config = resolve(TINY, ['train.total_actions=12'])
+  a, _ = Checkpoints(straight).restore(like, config)
+  b, _ = Checkpoints(killed).restore(like, config)
+  assert int(a.actions) == int(b.actions) == 12
+  for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b)):
+    np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
+  records = [json.loads(line) for line in (killed / 'actions.jsonl').read_text().splitlines()]
+  assert [r['action'] for r in records] == list(range(12))

@@ -39,6 +39,16 @@ from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites import SUITES, suite_files
 
 
+def _output_folder(path: str) -> pathlib.Path | None:
+  """The --out folder, created; None (and the error printed) when it cannot be."""
+  try:
+    pathlib.Path(path).mkdir(parents=True, exist_ok=True)
+  except OSError as e:
+    print(f'error: --out {path}: {e.strerror}', file=sys.stderr)
+    return None
+  return pathlib.Path(path)
+
+
 def main(argv=None) -> int:
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   config_lib.add_arguments(parser)
@@ -58,7 +68,12 @@ def main(argv=None) -> int:
   parser.add_argument('--seed', type=int, default=0)
   parser.add_argument('--save-visuals', action='store_true',
                       help='write a PNG strip of heightmaps and actions per run')
+  parser.add_argument('--allow-overlaps', action='store_true',
+                      help='evaluate cases whose objects interpenetrate as placed (refused '
+                           'otherwise: such a case bursts apart as it settles)')
   args = parser.parse_args(argv)
+  if args.runs < 1 or args.max_actions < 1:
+    parser.error('--runs and --max-actions must be at least 1')
   if args.tables:
     if args.checkpoint or args.baseline:
       parser.error('--tables joins earlier results; give it without --checkpoint or --baseline')
@@ -67,8 +82,9 @@ def main(argv=None) -> int:
     except report_lib.ResultsError as e:
       print(f'error: {e}', file=sys.stderr)
       return 2
-    out = pathlib.Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = _output_folder(args.out)
+    if out is None:
+      return 2
     print(report_lib.write_report(report, out))
     print(f'wrote {out / "results.json"} and {out / "results.md"}')
     return 0
@@ -76,17 +92,29 @@ def main(argv=None) -> int:
     parser.error('give --checkpoint DIR ..., --baseline heuristic or --tables EVAL_DIR ...')
   try:  # everything that can be wrong with the input fails here, before any compile
     base = config_lib.from_arguments(args)
-    suites = {name: [read_case(f) for f in files]
+    bounds = base.scene.workspace_half, base.scene.workspace_top
+    suites = {name: [read_case(f, *bounds) for f in files]
               for name, files in suite_files(args.suite).items()}
+    overlapping = [m for cases in suites.values() for m in evaluation.case_problems(cases, base)]
     sources = [load(d) for d in args.checkpoint] + ([args.baseline] if args.baseline else [])
     labels = report_lib.row_labels(args.checkpoint, [s[0].network.method for s in sources
-                                          if not isinstance(s, str)])
+                                                     if not isinstance(s, str)])
   except (config_lib.ConfigError, ScenarioError, PolicyError) as e:
     print(f'error: {e}', file=sys.stderr)
     return 2
+  if overlapping and not args.allow_overlaps:
+    print('error: ' + '\n  '.join(overlapping) + '\n(--allow-overlaps evaluates them anyway)',
+          file=sys.stderr)
+    return 2
+  for suite, cases in suites.items():
+    parked = sum(len(c.parked_lines) for c in cases)
+    if parked:
+      print(f'{suite}: {parked} lines of its VPG files lie outside VPG\'s workspace (objects VPG '
+            'parked) and are not in play')
+  out = _output_folder(args.out)
+  if out is None:
+    return 2
   runtime.setup()
-  out = pathlib.Path(args.out)
-  out.mkdir(parents=True, exist_ok=True)
   report = {}
   for suite, cases in suites.items():
     names = [c.name for c in cases]

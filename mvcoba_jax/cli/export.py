@@ -21,6 +21,9 @@ def main(argv=None) -> int:
   except PolicyError as e:
     print(f'error: {e}', file=sys.stderr)
     return 2
+  except OSError as e:  # the output folder cannot be written
+    print(f'error: {e.filename}: {e.strerror}', file=sys.stderr)
+    return 2
   for path in paths.values():
     print(path)
   return 0

@@ -63,8 +63,6 @@ def parse(argv):
     config = config_lib.resolve(args.config, overrides)
   except config_lib.ConfigError as e:
     parser.error(str(e))
-  if config.network.method not in methods.names():
-    parser.error(f'network.method={config.network.method!r}; choose one of {methods.names()}')
   return args, config
 
 

@@ -29,7 +29,8 @@ def main(argv=None) -> int:
   args = parser.parse_args(argv)
   try:
     env = Tabletop(config_lib.from_arguments(args))
-    layout = case_to_layout(read_case(args.case), env)
+    scene = env.config.scene
+    layout = case_to_layout(read_case(args.case, scene.workspace_half, scene.workspace_top), env)
   except (config_lib.ConfigError, ScenarioError) as e:
     parser.error(str(e))
   runtime.setup()

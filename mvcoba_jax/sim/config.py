@@ -1,16 +1,102 @@
 """Configuration of the simulated tabletop: the compiled scene, its cameras and the episode.
 
 The training configuration (`mvcoba_jax.config.Config`) holds these as its `scene` and `env`;
-the simulator itself needs only an object with those two fields (`TabletopConfig`).
+the simulator itself needs only an object with those two fields (`TabletopConfig`). Every config
+dataclass checks its fields' types and ranges when it is built (`check`), so presets, `--set`
+overrides, saved config.json files and exported model.json files all pass the same gate.
 """
 from __future__ import annotations
 
 import dataclasses
+import functools
+import math
+import typing
 from typing import Protocol
+
+from mvcoba_jax.sim.shapes import SHAPE_NAMES
+
+BACKENDS = ('auto', 'native', 'mjx')
 
 
 class ConfigError(ValueError):
   """A preset, override or saved config that does not fit the configuration schema."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Between:
+  """A numeric range; `low_open` excludes its lower end."""
+  low: float
+  high: float
+  low_open: bool = False
+
+  def __contains__(self, value) -> bool:
+    return (self.low < value if self.low_open else self.low <= value) and value <= self.high
+
+  def __str__(self) -> str:
+    return f'{"(" if self.low_open else "["}{self.low:g}, {self.high:g}]'
+
+
+@functools.cache
+def _hints(cls) -> dict:
+  return typing.get_type_hints(cls)
+
+
+def _type_problem(value, tp) -> str | None:
+  """Why `value` is not of the declared type `tp`, or None."""
+  origin = typing.get_origin(tp)
+  if tp is bool:
+    return None if isinstance(value, bool) else 'expected true or false'
+  if tp is int:
+    return None if isinstance(value, int) and not isinstance(value, bool) else 'expected an integer'
+  if tp is float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+      return 'expected a number'
+    return None if math.isfinite(value) else 'expected a finite number'
+  if tp is str:
+    return None if isinstance(value, str) else 'expected a string'
+  if dataclasses.is_dataclass(tp):
+    return None if isinstance(value, tp) else f'expected a {tp.__name__}'
+  if origin is tuple:
+    if not isinstance(value, tuple):
+      return 'expected a sequence'
+    args = typing.get_args(tp)
+    if len(args) == 2 and args[1] is Ellipsis:
+      args = (args[0],) * len(value)
+    elif len(args) != len(value):
+      return f'expected {len(args)} values, got {len(value)}'
+    for i, (v, a) in enumerate(zip(value, args)):
+      problem = _type_problem(v, a)
+      if problem:
+        return f'[{i}]: {problem}'
+    return None
+  raise TypeError(f'no check for fields of type {tp}')
+
+
+def check(obj, prefix: str, rules: dict) -> None:
+  """Raises ConfigError naming `prefix` + field when a field of `obj` has the wrong type, lies
+  outside its `rules` entry (a Between, or a tuple of allowed strings), or holds a sequence one
+  of whose numbers does (a Between applies to every number in it)."""
+  hints = _hints(type(obj))
+  for field in dataclasses.fields(obj):
+    key, value = f'{prefix}{field.name}', getattr(obj, field.name)
+    problem = _type_problem(value, hints[field.name])
+    if problem:
+      raise ConfigError(f'{key}={value!r}: {problem}')
+    rule = rules.get(field.name)
+    if isinstance(rule, Between):
+      for number in _numbers(value):
+        if number not in rule:
+          raise ConfigError(f'{key}={value!r}: allowed range {rule}')
+    elif rule is not None and value not in rule:
+      raise ConfigError(f'{key}={value!r}: allowed values are {", ".join(rule)}')
+
+
+def _numbers(value):
+  if isinstance(value, tuple):
+    for v in value:
+      yield from _numbers(v)
+  elif isinstance(value, (int, float)) and not isinstance(value, bool):
+    yield value
 
 
 @dataclasses.dataclass(frozen=True)
@@ -21,6 +107,11 @@ class CameraConfig:
   width: int = 160
   height: int = 160
   fovy_deg: float = 38.0
+
+  def __post_init__(self):
+    check(self, 'scene.cameras[].', {'pos': Between(-10, 10), 'target': Between(-10, 10),
+                                     'width': Between(8, 4096), 'height': Between(8, 4096),
+                                     'fovy_deg': Between(1, 179)})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,6 +149,27 @@ class SceneConfig:
   occluders: tuple[tuple[float, float, float], ...] = (
       (0.01, 0.12, 0.12), (0.01, 0.05, 0.05), (0.01, 0.05, 0.05))
 
+  def __post_init__(self):
+    check(self, 'scene.', {
+        'backend': BACKENDS, 'native_threads': Between(0, 1024),
+        'pool': Between(0, 256), 'workspace_half': Between(0.05, 1.0),
+        'workspace_top': Between(0.05, 2.0), 'timestep': Between(0.0001, 0.02),
+        'iterations': Between(1, 1000), 'ls_iterations': Between(1, 1000),
+        'contact_timeconst': Between(0, 1, low_open=True),
+        'friction': Between(0, 10, low_open=True), 'finger_friction': Between(0, 10, low_open=True),
+        'object_density': Between(1, 100000), 'max_geom_pairs': Between(1, 100000),
+        'max_contact_points': Between(1, 1000000), 'occluders': Between(0, 1, low_open=True)})
+    names = [name for name, _ in self.pool]
+    unknown = [n for n in names if n not in SHAPE_NAMES]
+    if unknown or len(set(names)) < len(names) or not self.num_slots:
+      raise ConfigError(f'scene.pool={self.pool!r}: expected distinct shapes of '
+                        f'{", ".join(SHAPE_NAMES)} with at least one slot in all')
+    if not self.cameras:
+      raise ConfigError('scene.cameras: at least one camera')
+    if self.contact_timeconst < 2 * self.timestep:
+      raise ConfigError(f'scene.contact_timeconst={self.contact_timeconst!r} is below 2 x '
+                        f'scene.timestep ({2 * self.timestep:g}), which MuJoCo would use instead')
+
   @property
   def num_slots(self) -> int:
     return sum(n for _, n in self.pool)
@@ -89,6 +201,18 @@ class EnvConfig:
   # An episode ends after more consecutive failed actions than this, in training (new objects are
   # dropped) and in evaluation (the run ends; the paper's completion rule counts 5).
   max_failures: int = 5
+
+  def __post_init__(self):
+    check(self, 'env.', {
+        'num_objects': Between(1, 256), 'num_rotations': Between(1, 64),
+        'settle_steps': Between(0, 100000), 'drop_margin': Between(0, 0.2),
+        'layer_height': Between(0, 1, low_open=True), 'grasp_depth': Between(0, 0.2),
+        'lift_height': Between(0, 1, low_open=True), 'approach_height': Between(0, 1, low_open=True),
+        'descend_speed': Between(0, 10, low_open=True), 'lift_speed': Between(0, 10, low_open=True),
+        'close_time': Between(0, 5, low_open=True), 'hold_time': Between(0, 5),
+        'push_height': Between(0, 0.2), 'push_length': Between(0, 1, low_open=True),
+        'push_speed': Between(0, 10, low_open=True), 'min_tip_height': Between(0, 0.1),
+        'max_qvel': Between(0, 1e6, low_open=True), 'max_failures': Between(0, 1000)})
 
 
 class TabletopConfig(Protocol):

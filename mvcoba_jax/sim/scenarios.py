@@ -26,8 +26,10 @@ from __future__ import annotations
 import collections
 import dataclasses
 import math
+import os
 import pathlib
 import re
+import stat
 
 import jax
 import jax.numpy as jnp
@@ -59,6 +61,9 @@ _OBJECT_FIELDS = ('shape', 'colour', 'x', 'y', 'yaw_deg', 'z')
 _OCCLUDER_FIELDS = ('occluder', 'slot', 'x', 'y', 'z', 'yaw_deg')
 _VPG_FIELDS = ('mesh', 'red', 'green', 'blue', 'x', 'y', 'z', 'euler_a', 'euler_b', 'euler_c')
 _COMMENT = re.compile(r'^\s*#.*|\s#(\s.*)?$')
+MAX_FILE_BYTES = 1_000_000  # a case file is a few dozen lines
+OCCLUDER_REACH = 1.0  # m: occluders stand within this of the workspace centre, up to this high
+OVERLAP_TOLERANCE = 0.003  # m: deeper interpenetration as placed means a broken case
 
 
 class ScenarioError(ValueError):
@@ -88,6 +93,7 @@ class Case:
   path: str
   objects: tuple[CaseObject, ...]
   occluders: tuple[CaseOccluder, ...] = ()
+  parked_lines: tuple[int, ...] = ()  # VPG lines outside VPG's workspace: parked, not in play
 
 
 def _error(path, line: int, field: str, message: str) -> ScenarioError:
@@ -144,9 +150,14 @@ def rest_quat(shape: str, yaw: float) -> tuple[float, ...]:
 
 
 # ------------------------------------------------------------------------------ our format
-def _read_scn(path, text: str, workspace_half: float):
+def _yaw(degrees: float) -> float:
+  """Radians of any finite angle in degrees, reduced in float64 first (1e300 deg stays exact)."""
+  return math.radians(math.fmod(degrees, 360.0))
+
+
+def _read_scn(path, text: str, workspace_half: float, workspace_top: float):
   objects, occluders, occluder_lines = [], [], {}
-  for n, raw in enumerate(text.splitlines(), 1):
+  for n, raw in enumerate(text.split('\n'), 1):
     fields = _COMMENT.sub('', raw).split()
     if not fields:
       continue
@@ -164,7 +175,17 @@ def _read_scn(path, text: str, workspace_half: float):
       occluder_lines[slot] = n
       x, y, z, yaw = (_number(path, n, name, t) for name, t in zip(_OCCLUDER_FIELDS[2:],
                                                                    fields[2:]))
-      occluders.append(CaseOccluder(slot, (x, y, z), math.radians(yaw), n))
+      for name, v in (('x', x), ('y', y)):
+        if abs(v) > OCCLUDER_REACH:
+          raise _error(path, n, name, f'{v:g}: occluders stand within |{name}| <= '
+                       f'{OCCLUDER_REACH:g} m')
+      if max(abs(x), abs(y)) <= workspace_half:
+        raise _error(path, n, 'x', f'({x:g}, {y:g}) lies inside the workspace (|x|, |y| <= '
+                     f'{workspace_half:g}); occluders stand outside it')
+      if not 0.0 < z <= OCCLUDER_REACH:
+        raise _error(path, n, 'z', f'{z:g}: an occluder\'s centre is above the table, at most '
+                     f'{OCCLUDER_REACH:g} m')
+      occluders.append(CaseOccluder(slot, (x, y, z), _yaw(yaw), n))
       continue
     _check_count(path, n, fields, _OBJECT_FIELDS, optional=1)
     shape = fields[0]
@@ -183,7 +204,9 @@ def _read_scn(path, text: str, workspace_half: float):
       lowest = 0.5 * float(shapes.SHAPES[shape].rest_extent[2])
       if z < lowest:
         raise _error(path, n, 'z', f'{z:g} puts the {shape} into the table (lowest {lowest:g})')
-    objects.append(CaseObject(shape, color, (x, y, z), rest_quat(shape, math.radians(yaw)), n))
+      if z > workspace_top:
+        raise _error(path, n, 'z', f'{z:g} lies above the workspace (z <= {workspace_top:g})')
+    objects.append(CaseObject(shape, color, (x, y, z), rest_quat(shape, _yaw(yaw)), n))
   return objects, occluders
 
 
@@ -245,8 +268,8 @@ def _vpg_pose(shape: str, euler, z: float):
 
 
 def _read_vpg(path, text: str):
-  objects = []
-  for n, raw in enumerate(text.splitlines(), 1):
+  objects, parked = [], []
+  for n, raw in enumerate(text.split('\n'), 1):
     fields = raw.split()
     if not fields:
       continue
@@ -261,29 +284,58 @@ def _read_vpg(path, text: str):
       if not 0.0 <= c <= 1.0:
         raise _error(path, n, name, f'{c:g} is not in 0..1')
     if not all(lo <= v <= hi for v, (lo, hi) in zip(xyz, VPG_BOX)):
-      continue  # parked out of play by VPG
+      parked.append(n)  # parked out of play by VPG
+      continue
+    euler = [math.fmod(a, 2 * math.pi) for a in euler]
     rot, z = _vpg_pose(shape, euler, xyz[2])
     objects.append(CaseObject(shape, tuple(color), (xyz[0] + VPG_TO_OURS_X, xyz[1], z),
                               tuple(float(q) for q in matrix_to_quat(rot)), n))
-  return objects, []
+  return objects, [], parked
 
 
-def read_case(path, workspace_half: float = 0.224) -> Case:
+def _read_text(path: pathlib.Path) -> str:
+  """The UTF-8 text of a regular file; any other file, OS error or bad byte is a ScenarioError."""
+  try:
+    info = os.stat(path)
+  except OSError as e:
+    raise ScenarioError(f'{path}: cannot read the case file: {e.strerror}') from None
+  if not stat.S_ISREG(info.st_mode):  # a FIFO would block the reader, a folder has no text
+    raise ScenarioError(f'{path}: not a regular file')
+  if info.st_size > MAX_FILE_BYTES:
+    raise ScenarioError(f'{path}: {info.st_size} bytes; a case file holds at most '
+                        f'{MAX_FILE_BYTES}')
+  try:
+    data = path.read_bytes()
+  except OSError as e:
+    raise ScenarioError(f'{path}: cannot read the case file: {e.strerror}') from None
+  try:
+    return data.decode('utf-8')
+  except UnicodeDecodeError as e:
+    line = data[:e.start].count(b'\n') + 1
+    raise ScenarioError(f'{path}:{line}: not UTF-8 text (byte {data[e.start]:#04x})') from None
+
+
+def read_case(path, workspace_half: float = 0.224, workspace_top: float = 0.4) -> Case:
   """Loads a case: `.scn` in our format, `.txt` in VPG's.
 
-  `workspace_half` bounds the objects of `.scn` files; VPG files use VPG's own workspace box.
+  `workspace_half` and `workspace_top` bound the objects of `.scn` files; VPG files use VPG's own
+  workspace box, and their lines outside it (objects VPG parked) are kept in `parked_lines`.
   """
   path = pathlib.Path(path)
-  if path.suffix == '.scn':
-    objects, occluders = _read_scn(path, path.read_text(), workspace_half)
-  elif path.suffix == '.txt':
-    objects, occluders = _read_vpg(path, path.read_text())
-  else:
+  if path.suffix not in ('.scn', '.txt'):
     raise ScenarioError(f'{path}: unknown case format {path.suffix!r}; expected .scn (ours) or '
                         '.txt (VPG)')
+  text = _read_text(path)
+  parked = []
+  if path.suffix == '.scn':
+    objects, occluders = _read_scn(path, text, workspace_half, workspace_top)
+  else:
+    objects, occluders, parked = _read_vpg(path, text)
   if not objects:
-    raise ScenarioError(f'{path}: the case holds no objects')
-  return Case(path.stem, str(path), tuple(objects), tuple(occluders))
+    where = (f'; its {len(parked)} lines ({", ".join(map(str, parked[:10]))}) all lie outside '
+             'VPG\'s workspace, where VPG parks unused objects') if parked else ''
+    raise ScenarioError(f'{path}: the case holds no objects{where}')
+  return Case(path.stem, str(path), tuple(objects), tuple(occluders), tuple(parked))
 
 
 # ------------------------------------------------------------------------------ layouts
@@ -317,6 +369,28 @@ def case_to_layout(case: Case, env) -> Layout:
   f32 = lambda a: jnp.asarray(a, jnp.float32)
   return Layout(in_play=jnp.asarray(in_play), pos=f32(pos), quat=f32(quat), color=f32(color),
                 occluder_pos=f32(occ_pos), occluder_quat=f32(occ_quat))
+
+
+def overlaps(case: Case, env, tolerance: float = OVERLAP_TOLERANCE) -> list[str]:
+  """One message per pair of `case`'s objects that interpenetrate by more than `tolerance` as
+  placed, before any settling, naming both lines (native MuJoCo's collision detection)."""
+  m, index = env.scene.mj_model, env.scene.index
+  data = mujoco.MjData(m)
+  line_of = {}
+  for slot in range(len(index.slot_shapes)):
+    data.qpos[index.slot_qpos[slot]:index.slot_qpos[slot] + 7] = park_position(slot) + (1, 0, 0, 0)
+  for slot, obj in zip(case_slots(case, env), case.objects):
+    data.qpos[index.slot_qpos[slot]:index.slot_qpos[slot] + 7] = obj.pos + obj.quat
+    line_of[slot] = obj.line
+  mujoco.mj_forward(m, data)
+  deepest = {}
+  n = data.ncon
+  for g1, g2, dist in zip(data.contact.geom1[:n], data.contact.geom2[:n], data.contact.dist[:n]):
+    a, b = sorted((int(index.geom_slot[g1]), int(index.geom_slot[g2])))
+    if a in line_of and b in line_of and a != b and -dist > tolerance:
+      deepest[a, b] = max(deepest.get((a, b), 0.0), -float(dist))
+  return [f'{case.path}:{line_of[a]} and line {line_of[b]}: the objects interpenetrate by '
+          f'{1000 * depth:.1f} mm' for (a, b), depth in sorted(deepest.items())]
 
 
 def stack_layouts(layouts) -> Layout:

@@ -1,0 +1,105 @@
+"""Configs are checked when built: presets, `--set` overrides and saved dicts go through the same
+field and relation checks, and a bad value is refused with the key and what it allows."""
+import dataclasses
+import random
+import typing
+
+import pytest
+
+from mvcoba_jax.config import PRESETS, Config, ConfigError, from_dict, resolve, to_dict
+
+
+@pytest.mark.parametrize('preset', PRESETS)
+def test_presets_are_valid(preset):
+  assert isinstance(resolve(preset), Config)
+
+
+@pytest.mark.parametrize('assignment, says', [
+    ('scene.timestep=0', 'scene.timestep=0.0: allowed range [0.0001, 0.02]'),
+    ('network.stem_patch=0', 'network.stem_patch=0: allowed range [1, 16]'),
+    ('network.groups=3', 'network.groups=3 must divide'),
+    ('network.features=', 'network.features: at least one stage'),
+    ('perception.heightmap_resolution=0', 'perception.heightmap_resolution=0.0: allowed'),
+    ('perception.heightmap_resolution=0.003', 'must tile the workspace'),
+    ('num_envs=0', 'num_envs=0: allowed range [1, 65536]'),
+    ('env.num_rotations=0', 'env.num_rotations=0: allowed range [1, 64]'),
+    ('train.checkpoint_every=0', 'train.checkpoint_every=0: allowed range'),
+    ('train.learning_rate=nan', "train.learning_rate='nan': expected a finite number"),
+    ('train.learning_rate=1e300', 'train.learning_rate=1e+300: allowed range (0, 1]'),
+    ('train.replay_capacity=5000000', 'GiB of replay; the limit is 16 GiB'),
+    ('seed=18446744073709551616', 'seed=18446744073709551616: allowed range'),
+    ('num_envs=١', "num_envs='١': expected an integer"),
+    ('env.num_objects=99', 'env.num_objects=99 exceeds the 12 object slots of scene.pool'),
+    ('scene.backend=warp', "scene.backend='warp': allowed values are auto, native, mjx"),
+    ('scene.pool=cube', 'expected shape:count'),
+    ('scene.pool=cube:1,cube:2', 'expected distinct shapes'),
+    ('scene.pool=lego:2', 'expected distinct shapes'),
+    ('scene.contact_timeconst=0.001', 'below 2 x scene.timestep'),
+    ('scene.cameras=1', 'cannot be set from the command line'),
+    ('perception.change_min=0.5', 'perception.change_min=0.5 must be below'),
+    ('network.method=nope', "network.method='nope': allowed values are"),
+    ('train.epsilon_end=0.9', 'must not exceed train.epsilon_start'),
+    ('num_envs=4096', 'GiB of feature maps per acting forward'),
+])
+def test_bad_override_is_refused_naming_the_key(assignment, says):
+  with pytest.raises(ConfigError) as error:
+    resolve('default', [assignment])
+  assert says in str(error.value)
+
+
+def test_overrides_apply_in_any_order():
+  """Relations are checked once every override is in."""
+  config = resolve('default', ['scene.pool=cube:2', 'env.num_objects=2'])
+  assert config.scene.num_slots == 2 and config.env.num_objects == 2
+
+
+def test_occluders_can_be_set():
+  config = resolve('default', ['scene.occluders=0.01:0.1:0.1,0.02:0.05:0.05'])
+  assert config.scene.occluders == ((0.01, 0.1, 0.1), (0.02, 0.05, 0.05))
+
+
+def test_saved_config_with_wrong_types_is_refused_naming_the_key():
+  saved = to_dict(resolve('tiny'))
+  saved['train']['batch_size'] = 'eight'
+  with pytest.raises(ConfigError, match=r"train\.batch_size='eight': expected an integer"):
+    from_dict(saved)
+  saved = to_dict(resolve('tiny'))
+  saved['network']['features'] = 16
+  with pytest.raises(ConfigError, match=r'config\.network\.features=16: expected a list'):
+    from_dict(saved)
+  with pytest.raises(ConfigError, match='expected an object of SceneConfig fields'):
+    from_dict({**to_dict(resolve('tiny')), 'scene': [1, 2]})
+
+
+def _leaf_keys(node, prefix=''):
+  hints = typing.get_type_hints(type(node))
+  for field in dataclasses.fields(node):
+    value = getattr(node, field.name)
+    if dataclasses.is_dataclass(value):
+      yield from _leaf_keys(value, f'{prefix}{field.name}.')
+    else:
+      yield f'{prefix}{field.name}', hints[field.name]
+
+
+NASTY = ('nan', 'inf', '-inf', '1e300', '-1e300', '1e-300', '0', '-1', '1', '2', '0.5', '-0.5',
+         '18446744073709551616', '2**64', '١٢', '', ' ', 'abc', '1,2', '1,2,3', 'cube:3',
+         'cube:3,disk:1', 'true', 'false', '0x10', '1_000', '1e3', '3.', '.5', '+7', '\u2028',
+         'é', '0.01:0.1:0.1', '::', ',', 'None', '[1, 2]', '1' * 400, 'auto', 'mjx', 'small')
+
+
+def test_fuzzed_overrides_are_accepted_or_refused_naming_the_key():
+  """300 overrides from a fixed seed: each is a valid config or a ConfigError that names its
+  key; nothing else escapes."""
+  rng = random.Random(0)
+  keys = list(_leaf_keys(Config()))
+  outcomes = {'accepted': 0, 'refused': 0}
+  for _ in range(300):
+    key, _ = rng.choice(keys)
+    text = rng.choice(NASTY) if rng.random() < 0.8 else repr(rng.uniform(-1e3, 1e3))
+    try:
+      resolve('tiny', [f'{key}={text}'])
+      outcomes['accepted'] += 1
+    except ConfigError as e:
+      assert key.split('.')[-1] in str(e) or 'workspace' in str(e), (key, text, str(e))
+      outcomes['refused'] += 1
+  assert outcomes['accepted'] > 10 and outcomes['refused'] > 100, outcomes

@@ -1,0 +1,137 @@
+"""Damaged or mismatched policy files (a training checkpoint, an exported folder) fail with one
+PolicyError naming the file and what is wrong, never a traceback from NumPy, Orbax or JAX."""
+import json
+import shutil
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from flax import nnx
+
+from mvcoba_jax import export, policy
+from mvcoba_jax.checkpoint import Checkpoints
+from mvcoba_jax.cli import eval as eval_cli
+from mvcoba_jax.config import resolve, to_dict
+from mvcoba_jax.training import Trainer
+
+
+@pytest.fixture(scope='module')
+def saved(tmp_path_factory):
+  """(work directory with one checkpoint, exported folder, trainer, initial state)."""
+  config = resolve('tiny')
+  trainer = Trainer(config)
+  like = jax.eval_shape(trainer.init, jax.random.PRNGKey(config.seed))
+  params = trainer.init_params(jax.random.PRNGKey(7))
+  state = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), like).replace(params=params)
+  workdir = tmp_path_factory.mktemp('run')
+  (workdir / 'config.json').write_text(json.dumps(to_dict(config)))
+  Checkpoints(workdir).save(8, state, {'config': to_dict(config), 'iteration': 4})
+  folder = tmp_path_factory.mktemp('exported')
+  flat = policy.flat_params(nnx.merge(trainer.graphdef, params))
+  np.savez(folder / 'params.npz', **flat)
+  (folder / 'model.json').write_text(json.dumps(export.describe(config, flat, 8, workdir)))
+  return workdir, folder, state
+
+
+def _copy(source, tmp_path):
+  target = tmp_path / source.name
+  shutil.copytree(source, target)
+  return target
+
+
+def _arrays(folder):
+  with np.load(folder / 'params.npz') as saved:
+    return {n: saved[n] for n in saved.files}
+
+
+def test_intact_files_load(saved):
+  workdir, folder, _ = saved
+  assert policy.load(workdir)[2] == 8 and policy.load(folder)[2] == 8
+
+
+def _refused(path, *says):
+  with pytest.raises(policy.PolicyError) as error:
+    policy.load(path)
+  message = str(error.value)
+  assert all(s in message for s in says), message
+  return message
+
+
+@pytest.mark.parametrize('damage', ['truncated', 'empty', 'bit-flipped'])
+def test_damaged_params_npz(saved, tmp_path, damage):
+  folder = _copy(saved[1], tmp_path)
+  data = (folder / 'params.npz').read_bytes()
+  data = {'truncated': data[:len(data) // 2], 'empty': b'',
+          'bit-flipped': data[:len(data) // 2] + bytes([data[len(data) // 2] ^ 0x40])
+          + data[len(data) // 2 + 1:]}[damage]
+  (folder / 'params.npz').write_bytes(data)
+  _refused(folder, str(folder / 'params.npz'))
+
+
+def test_non_finite_and_wrong_dtype_params(saved, tmp_path):
+  folder = _copy(saved[1], tmp_path)
+  arrays = _arrays(folder)
+  first, second = sorted(arrays)[:2]
+  arrays[first] = np.full_like(arrays[first], np.nan)
+  arrays[second] = arrays[second].astype(np.float64)
+  np.savez(folder / 'params.npz', **arrays)
+  _refused(folder, f'{first}: holds NaN', f'{second}: dtype float64')
+
+
+@pytest.mark.parametrize('edit, says', [
+    (lambda d: d['config']['train'].update(batch_size='eight'), "train.batch_size='eight'"),
+    (lambda d: d['config']['perception'].update(heightmap_resolution=0.003), 'must tile'),
+    (lambda d: d['source'].update(checkpoint_step='x'), 'not an export'),
+    (lambda d: d.update(format='other/1'), "format 'other/1'"),
+])
+def test_bad_model_json(saved, tmp_path, edit, says):
+  folder = _copy(saved[1], tmp_path)
+  described = json.loads((folder / 'model.json').read_text())
+  edit(described)
+  (folder / 'model.json').write_text(json.dumps(described))
+  _refused(folder, str(folder / 'model.json'), says)
+  (folder / 'model.json').write_bytes(b'{"format": \xff')
+  _refused(folder, str(folder / 'model.json'))
+
+
+def test_damaged_checkpoint(saved, tmp_path):
+  workdir = _copy(saved[0], tmp_path)
+  for f in (workdir / 'checkpoints' / '8' / 'state').rglob('*'):
+    if f.is_file() and f.stat().st_size:
+      f.write_bytes(f.read_bytes()[:f.stat().st_size // 2])
+  _refused(workdir, str(workdir / 'checkpoints' / '8'))
+  workdir = _copy(saved[0], tmp_path / 'meta')
+  for f in (workdir / 'checkpoints' / '8' / 'meta').rglob('*'):
+    if f.is_file():
+      f.write_text('{not json')
+  _refused(workdir, str(workdir / 'checkpoints' / '8'))
+
+
+def test_empty_step_folder_is_ignored_or_named(saved, tmp_path):
+  workdir = _copy(saved[0], tmp_path)
+  (workdir / 'checkpoints' / '16').mkdir()
+  try:
+    assert policy.load(workdir)[2] == 8
+  except policy.PolicyError as e:
+    assert str(workdir / 'checkpoints' / '16') in str(e)
+
+
+def test_non_finite_checkpoint_parameters(saved, tmp_path):
+  workdir = _copy(saved[0], tmp_path)
+  shutil.rmtree(workdir / 'checkpoints')
+  state = saved[2]
+  state = state.replace(params=jax.tree.map(lambda p: jnp.full_like(p, jnp.inf), state.params))
+  config = resolve('tiny')
+  Checkpoints(workdir).save(8, state, {'config': to_dict(config), 'iteration': 4})
+  _refused(workdir, 'NaN or infinite')
+
+
+def test_eval_cli_names_the_damaged_file_in_one_line(saved, tmp_path, capsys):
+  folder = _copy(saved[1], tmp_path)
+  (folder / 'params.npz').write_bytes(b'')
+  assert eval_cli.main(['--checkpoint', str(folder), '--suite', 'occluded', '--out',
+                        str(tmp_path / 'out')]) == 2
+  err = capsys.readouterr().err
+  assert err.startswith('error: ') and str(folder / 'params.npz') in err
+  assert 'Traceback' not in err and not (tmp_path / 'out').exists()
