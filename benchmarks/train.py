@@ -1,13 +1,14 @@
-"""Training-step throughput and where its time goes: physics, rendering, network; both backends.
+"""Training-step throughput and where its time goes: physics, rendering, the learner's parts.
 
-Prints one JSON object: for each batch size B and physics backend (native at every B, MJX at the
-`--mjx-batch` sizes), the compile time and the steady-state wall time of the jitted training
-iteration (actions/s, updates/s), and the time of its parts measured alone on the same states:
-the batched primitive (physics), render + heightmaps (rendering), the 16-rotation forward for
-acting plus one SGD update (network).
+Prints one JSON object: for each batch size B, bootstrap target (`train.target`: `--targets`) and
+physics backend (native at every B, MJX at the `--mjx-batch` sizes), the compile time and the
+steady-state wall time of the jitted training iteration (actions/s, updates/s), and the time of
+its parts measured alone on the same states: the batched primitive (physics), render + heightmaps
+(rendering), the 16-rotation acting forward, the target network's forward on a sampled batch of
+next states (`network` target only; part of the update) and the whole SGD update.
 
   python benchmarks/train.py [--config default] [--set KEY=VALUE] [--batch 1 8 32]
-      [--mjx-batch 8]
+      [--targets network acting] [--mjx-batch 8]
 """
 from __future__ import annotations
 
@@ -29,9 +30,10 @@ from mvcoba_jax import config as config_lib  # noqa: E402
 from mvcoba_jax.training import Trainer  # noqa: E402
 
 
-def bench(config, batch: int, backend: str, repeats: int) -> dict:
+def bench(config, batch: int, target: str, backend: str, repeats: int) -> dict:
   config = dataclasses.replace(config, num_envs=batch,
-                               scene=dataclasses.replace(config.scene, backend=backend))
+                               scene=dataclasses.replace(config.scene, backend=backend),
+                               train=dataclasses.replace(config.train, target=target))
   trainer = Trainer(config)
   state, init_first, _ = timed(jax.jit(trainer.init), jax.random.PRNGKey(0), repeats=0)
   args = (jnp.bool_(True), jnp.float32(-1.0))
@@ -45,12 +47,18 @@ def bench(config, batch: int, backend: str, repeats: int) -> dict:
   _, _, physics = timed(jax.jit(jax.vmap(trainer.env.step)), state.env, world, repeats=repeats)
   _, _, rendering = timed(jax.jit(trainer.observe), state.env, repeats=repeats)
   _, _, update = timed(jax.jit(trainer.update), state, jax.random.PRNGKey(2), repeats=repeats)
+  parts = {'physics': physics, 'rendering': rendering, 'network_act_forward': forward,
+           'network_update': update}
+  if target == 'network':  # the update's target forward, alone: batch_size sampled next states
+    sampled = jax.tree.map(lambda x: jnp.resize(x, (config.train.batch_size,) + x.shape[1:]),
+                           state.obs)
+    _, _, parts['network_target_in_update'] = timed(q, state.target_params, sampled,
+                                                    repeats=repeats)
   return {
-      'batch': batch, 'backend': backend, 'init_first_call_s': init_first,
+      'batch': batch, 'target': target, 'backend': backend, 'init_first_call_s': init_first,
       'iteration_compile_s': it_first - it_wall, 'iteration_wall_s': it_wall,
       'actions_per_s': batch * k / it_wall, 'updates_per_s': k / it_wall,
-      'per_action_step_s': {'physics': physics, 'rendering': rendering,
-                            'network_act_forward': forward, 'network_update': update},
+      'per_action_step_s': parts,
   }
 
 
@@ -60,21 +68,30 @@ def main():
   parser.add_argument('--batch', type=int, nargs='+', default=[1, 8, 32])
   parser.add_argument('--mjx-batch', type=int, nargs='*', default=[8],
                       help='batch sizes at which the MJX backend is measured too')
+  parser.add_argument('--targets', nargs='+', default=['network', 'acting'],
+                      choices=config_lib.TARGETS, help='train.target values to measure')
   parser.add_argument('--repeats', type=int, default=2)
   args = parser.parse_args()
   config = config_lib.from_arguments(args)
   rows = []
   for b in args.batch:
-    for backend in ('native', 'mjx') if b in args.mjx_batch else ('native',):
-      rows.append(bench(config, b, backend, args.repeats))
-      print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
+    for target in args.targets:
+      for backend in ('native', 'mjx') if b in args.mjx_batch else ('native',):
+        rows.append(bench(config, b, target, backend, args.repeats))
+        print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
   for r in rows:
-    parts = r['per_action_step_s']
+    parts = dict(r['per_action_step_s'])
+    parts.pop('network_target_in_update', None)  # inside network_update
     total = sum(parts.values())
     r['share_of_parts'] = {k: v / total for k, v in parts.items()}
-    same = [o for o in rows if o['batch'] == r['batch'] and o['backend'] == 'mjx']
+    twin = lambda **kv: [o for o in rows if o['batch'] == r['batch']
+                         and all(o[k] == v for k, v in kv.items())]
+    same = twin(backend='mjx', target=r['target'])
     if r['backend'] == 'native' and same:
       r['actions_per_s_over_mjx'] = r['actions_per_s'] / same[0]['actions_per_s']
+    network = twin(backend=r['backend'], target='network')
+    if r['target'] != 'network' and network:
+      r['actions_per_s_over_network_target'] = r['actions_per_s'] / network[0]['actions_per_s']
   print(json.dumps({'benchmark': 'train', 'config': args.config or 'default',
                     'overrides': args.overrides,
                     'settings': {'method': config.network.method,

@@ -99,15 +99,23 @@ def failed(primitive, grasp_success, changed):
   return jnp.where(primitive == GRASP, ~grasp_success, ~changed)
 
 
-def target_value(q_next, changed, done, rew, method: str, train: TrainConfig):
-  """y = r + gamma * max Q_target(s', a') over the primitive the rule picks at s' (0 where done)."""
+def future_value(q_next, changed, method: str):
+  """max Q(s', a') over the primitive the rule picks at s' (over both for max-Q rules), (B,)."""
   b = q_next.shape[0]
   best = q_next.reshape(b, 2, -1).max(axis=-1)
-  primitive = rule_primitive(method, changed, best)
   if methods.get(method).rule == 'max_q':
-    future = best.max(axis=-1)
-  else:
-    future = jnp.take_along_axis(best, primitive[:, None], axis=1)[:, 0]
+    return best.max(axis=-1)
+  primitive = rule_primitive(method, changed, best)
+  return jnp.take_along_axis(best, primitive[:, None], axis=1)[:, 0]
+
+
+def target_value(q_next, changed, done, rew, method: str, train: TrainConfig):
+  """y = r + gamma * max Q_target(s', a') over the primitive the rule picks at s' (0 where done)."""
+  return bootstrap(future_value(q_next, changed, method), done, rew, train)
+
+
+def bootstrap(future, done, rew, train: TrainConfig):
+  """y = r + gamma * future, with no future where done."""
   return rew + train.gamma * jnp.where(done, 0.0, future)
 
 

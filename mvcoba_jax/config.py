@@ -30,6 +30,7 @@ __all__ = ['CameraConfig', 'Config', 'ConfigError', 'EnvConfig', 'NetworkConfig'
 
 
 TRUNKS = ('small', 'densenet121')
+TARGETS = ('network', 'acting')  # train.target
 
 
 @dataclasses.dataclass(frozen=True)
@@ -82,6 +83,10 @@ class TrainConfig:
   batch_size: int = 8  # transitions per SGD update, one update per lockstep action
   priority_exponent: float = 0.6  # sampling weight |TD error|^alpha (0: uniform)
   target_update_period: int = 50  # SGD updates between target-network copies
+  # Where max Q(s') of the bootstrap target comes from: 'network', the target network run on each
+  # sampled s' at update time (16 rotations per sample); 'acting', the online network's acting
+  # forward at s', computed anyway one step later and stored with the transition (docs/design.md).
+  target: str = 'network'
   checkpoint_every: int = 25  # host iterations between checkpoints
   curve_window: int = 200  # attempts in the sliding window of the training curves
 
@@ -94,7 +99,8 @@ class TrainConfig:
         'epsilon_end': Between(0, 1), 'epsilon_decay_actions': Between(1, 10 ** 9),
         'explore_min_height': Between(0, 0.4), 'replay_capacity': Between(1, 10 ** 7),
         'batch_size': Between(1, 4096), 'priority_exponent': Between(0, 10),
-        'target_update_period': Between(1, 10 ** 9), 'checkpoint_every': Between(1, 10 ** 9),
+        'target_update_period': Between(1, 10 ** 9), 'target': TARGETS,
+        'checkpoint_every': Between(1, 10 ** 9),
         'curve_window': Between(1, 10 ** 7)})
 
 

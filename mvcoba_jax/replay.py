@@ -7,7 +7,7 @@ step, and checkpointing the pytree resumes the replay exactly.
 Observations are stored compactly: colour as uint8, depth as float16 (rounding error under
 0.25 mm below 0.5 m), seen as bool. Bytes per transition for 2 views at 112 x 112, s_t and
 s_{t+1} each: colour 75,264 + depth 50,176 + seen 25,088 = 150,528 per observation, 301,056 for
-both, plus 26 for the action, reward, flags and priority: about 294 KiB, so the default
+both, plus 30 for the action, reward, flags, stored value and priority: about 294 KiB, so the default
 capacity of 1024 takes about 308 MB. s_{t+1} is stored with its transition rather than shared
 with the next one, which doubles the images but keeps every slot self-contained when the ring
 overwrites old entries or an episode resets.
@@ -35,10 +35,11 @@ class Transition:
   next_obs: Observation
   done: jnp.ndarray  # bool: no bootstrap from s_{t+1} (bad physics; episodes' ends bootstrap)
   changed: jnp.ndarray  # bool: the action rule's change flag at s_{t+1} (MV-COBA's target primitive)
+  next_value: jnp.ndarray  # float32: max Q(s_{t+1}) from the acting forward (train.target='acting')
 
 
 _SCALARS = dict(primitive=jnp.int32, rotation=jnp.int32, row=jnp.int32, col=jnp.int32,
-                reward=jnp.float32, done=jnp.bool_, changed=jnp.bool_)
+                reward=jnp.float32, done=jnp.bool_, changed=jnp.bool_, next_value=jnp.float32)
 
 
 def _pack(obs: Observation) -> Observation:

@@ -32,6 +32,10 @@ class TrainState:
   target_params: Any
   opt_state: Any
   replay: replay_lib.Replay
+  # train.target='acting': the last step's transitions (B,), stored once this step's acting
+  # forward has valued their next state; `pending_valid` once there are any.
+  pending: replay_lib.Transition
+  pending_valid: jnp.ndarray
   key: jnp.ndarray
   actions: jnp.ndarray  # int32: actions executed so far, over all environments
   updates: jnp.ndarray  # int32: SGD updates applied
@@ -112,6 +116,11 @@ class Trainer:
     env_states = jax.tree.map(lambda x: x[:b], dropped)
     obs = self.observe(env_states)
     example = jax.tree.map(lambda x: x[0], obs)
+    zeros = lambda dtype: jnp.zeros(b, dtype)
+    pending = replay_lib.Transition(
+        obs=obs, next_obs=obs, primitive=zeros(jnp.int32), rotation=zeros(jnp.int32),
+        row=zeros(jnp.int32), col=zeros(jnp.int32), reward=zeros(jnp.float32),
+        done=zeros(jnp.bool_), changed=zeros(jnp.bool_), next_value=zeros(jnp.float32))
     return TrainState(
         env=env_states, obs=obs,
         reserve=reserve_lib.Reserve(states=jax.tree.map(lambda x: x[b:], dropped),
@@ -119,7 +128,7 @@ class Trainer:
         changed=jnp.ones(b, bool), failures=jnp.zeros(b, jnp.int32),
         params=params, target_params=params, opt_state=self.optimizer.init(params),
         replay=replay_lib.Replay.create(self.config.train.replay_capacity, example),
-        key=key, actions=jnp.int32(0), updates=jnp.int32(0), skipped_updates=jnp.int32(0),
+        pending=pending, pending_valid=jnp.bool_(False), key=key, actions=jnp.int32(0), updates=jnp.int32(0), skipped_updates=jnp.int32(0),
         episodes=jnp.int32(0))
 
   # ---------------------------------------------------------------- learning
@@ -131,8 +140,11 @@ class Trainer:
     such step: learning per action was 16 times slower than VPG's (issue #4, first default run).
     """
     t = self.config.train
-    q_next = self.q_maps(target_params, batch.next_obs)
-    y = agent.target_value(q_next, batch.changed, batch.done, batch.reward, self.method, t)
+    if t.target == 'acting':
+      y = agent.bootstrap(batch.next_value, batch.done, batch.reward, t)
+    else:
+      q_next = self.q_maps(target_params, batch.next_obs)
+      y = agent.target_value(q_next, batch.changed, batch.done, batch.reward, self.method, t)
     q = self.q_maps(params, batch.obs, batch.rotation[:, None])
     pred = networks.executed_q(q, batch.primitive, batch.row, batch.col)
     per = networks.huber_loss(pred, jax.lax.stop_gradient(y), t.huber_delta)
@@ -196,9 +208,19 @@ class Trainer:
     transition = replay_lib.Transition(
         obs=state.obs, primitive=action.primitive, rotation=action.rotation, row=action.row,
         col=action.col, reward=out.reward, next_obs=where_envs(healthy, obs, state.obs),
-        done=~healthy, changed=changed | done)
-    replay = jax.lax.cond(learn, lambda r: replay_lib.add(r, transition), lambda r: r,
-                          state.replay)
+        done=~healthy, changed=changed | done, next_value=jnp.zeros_like(out.reward))
+    if t.target == 'acting':
+      # The last step's transitions led to the states acted on now (or ended in bad physics,
+      # which does not bootstrap): this step's forward values their next states.
+      store = state.pending.replace(next_value=agent.future_value(q, state.changed, self.method))
+      add = learn & state.pending_valid
+      state = state.replace(
+          pending=jax.tree.map(lambda new, old: jnp.where(learn, new, old), transition,
+                               state.pending),
+          pending_valid=state.pending_valid | learn)
+    else:
+      store, add = transition, learn
+    replay = jax.lax.cond(add, lambda r: replay_lib.add(r, store), lambda r: r, state.replay)
     state = state.replace(replay=replay)
     state, loss = self.update(state, k_learn, learn & (replay.size > 0))
 

@@ -10,6 +10,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from mvcoba_jax import agent, networks
+from mvcoba_jax import replay as replay_lib
 from mvcoba_jax.checkpoint import Checkpoints
 from mvcoba_jax.cli import train as train_cli
 from mvcoba_jax.config import resolve
@@ -64,6 +66,38 @@ def test_episode_end_bootstraps_from_the_fresh_tabletop(trainer, trained, iterat
   np.testing.assert_array_equal(np.asarray(data.next_obs.depth[first]),
                                 np.asarray(data.obs.depth[second]))
   assert float(np.max(np.asarray(data.next_obs.depth[first], np.float32))) > 0.02  # objects again
+
+
+def test_acting_target_stores_the_next_forward_and_learns_from_it():
+  """train.target='acting': a step's transitions enter the replay one step later, carrying the
+  rule's max Q of their next state from that step's acting forward; the update bootstraps from
+  it and runs no target network."""
+  trainer = Trainer(resolve(TINY, ['train.target=acting', 'train.steps_per_iteration=1']))
+  step = jax.jit(trainer.iterate)
+  args = (jnp.bool_(True), jnp.float32(-1.0))
+  state = jax.jit(trainer.init)(jax.random.PRNGKey(0))
+  first, _ = step(state, *args)
+  assert int(first.replay.size) == 0 and bool(first.pending_valid)
+  q = trainer.q_maps(first.params, first.obs)
+  expected = agent.future_value(q, first.changed, trainer.method)
+  second, _ = step(first, *args)
+  b = trainer.config.num_envs
+  assert int(second.replay.size) == b
+  data = second.replay.data
+  np.testing.assert_allclose(np.asarray(data.next_value[:b]), np.asarray(expected), rtol=1e-5,
+                             atol=1e-6)
+  np.testing.assert_array_equal(np.asarray(data.reward[:b]), np.asarray(first.pending.reward))
+  batch = jax.tree.map(lambda x: x[:b], data)
+  batch = batch.replace(obs=replay_lib._unpack(batch.obs),
+                        next_obs=replay_lib._unpack(batch.next_obs))
+  poisoned = jax.tree.map(lambda p: jnp.full_like(p, jnp.nan), second.target_params)
+  _, td = trainer.loss(second.params, poisoned, batch, jnp.ones(b, bool))
+  assert np.isfinite(np.asarray(td)).all()  # the target network played no part
+  y = np.asarray(batch.reward) + trainer.config.train.gamma * np.where(
+      np.asarray(batch.done), 0.0, np.asarray(batch.next_value))
+  pred = networks.executed_q(trainer.q_maps(second.params, batch.obs, batch.rotation[:, None]),
+                             batch.primitive, batch.row, batch.col)
+  np.testing.assert_allclose(np.asarray(td), np.asarray(pred) - y, rtol=1e-5, atol=1e-5)
 
 
 def test_loss_falls_on_a_fixed_replay_batch(trainer, trained):
