@@ -27,7 +27,8 @@ def transitions(ids):
   return rp.Transition(obs=observations(num, seed=int(ids[0])),
                        next_obs=observations(num, seed=int(ids[0]) + 1000),
                        primitive=ids % 2, rotation=ids % 16, row=ids, col=ids + 1,
-                       reward=ids.astype(np.float32), done=ids % 3 == 0, changed=ids % 2 == 1)
+                       reward=ids.astype(np.float32), done=ids % 3 == 0, changed=ids % 2 == 1,
+                       next_value=-ids.astype(np.float32))
 
 
 def filled(capacity, num):
