@@ -48,13 +48,23 @@ def incompatibilities(saved: dict, current: dict) -> list[str]:
   return problems
 
 
-def _name(i: int) -> str:
-  return f'leaf{i:05d}'
+def _name(path) -> str:
+  """`env.sim.qpos`, `params.fcns.0.trunk.blocks.0.conv1.kernel.value`: a leaf's tree path."""
+  parts = []
+  for key in path:
+    for attr in ('name', 'key', 'idx'):
+      if hasattr(key, attr):
+        parts.append(str(getattr(key, attr)))
+        break
+  return '.'.join(parts)
 
 
 def _leaves(state) -> dict:
-  """The state's non-empty arrays by position (Orbax cannot save zero-size arrays)."""
-  return {_name(i): leaf for i, leaf in enumerate(jax.tree.leaves(state)) if leaf.size}
+  """The state's non-empty arrays by tree path (Orbax cannot save zero-size arrays). Named, not
+  numbered: a state whose structure changed fails to restore instead of filling its fields
+  with another field's values of the same shape."""
+  return {_name(path): leaf for path, leaf in jax.tree_util.tree_flatten_with_path(state)[0]
+          if leaf.size}
 
 
 def holds_checkpoint(workdir) -> bool:
@@ -98,9 +108,9 @@ class Checkpoints:
                             'another shape; it cannot be resumed here:\n  ' + '\n  '.join(problems))
     abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, _leaves(like))
     restored = self._read(step, state=ocp.args.StandardRestore(abstract))['state']
-    leaves, treedef = jax.tree.flatten(like)
-    return jax.tree.unflatten(treedef, [restored.get(_name(i), leaf)
-                                        for i, leaf in enumerate(leaves)]), meta
+    paths, treedef = jax.tree_util.tree_flatten_with_path(like)
+    return jax.tree.unflatten(treedef, [restored.get(_name(path), leaf)
+                                        for path, leaf in paths]), meta
 
   def _read(self, step: int, **items):
     """Orbax's restore of `items`; whatever is wrong with the files becomes one CheckpointError

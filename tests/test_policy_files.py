@@ -135,3 +135,17 @@ def test_eval_cli_names_the_damaged_file_in_one_line(saved, tmp_path, capsys):
   err = capsys.readouterr().err
   assert err.startswith('error: ') and str(folder / 'params.npz') in err
   assert 'Traceback' not in err and not (tmp_path / 'out').exists()
+
+
+def test_checkpoint_of_another_state_structure_is_refused(tmp_path):
+  """Leaves are saved by tree path: a state whose fields changed cannot be filled from a
+  checkpoint with another field's values of the same shape."""
+  from mvcoba_jax.checkpoint import CheckpointError
+  config = resolve('tiny')
+  saved = {'replay': {'size': jnp.int32(3)}, 'actions': jnp.int32(8)}
+  Checkpoints(tmp_path).save(8, saved, {'config': to_dict(config)})
+  state, _ = Checkpoints(tmp_path).restore(saved, config)
+  assert int(state['actions']) == 8 and int(state['replay']['size']) == 3
+  renamed = {'replay': {'cursor': jnp.int32(0)}, 'actions': jnp.int32(0)}
+  with pytest.raises(CheckpointError, match='cannot be read'):
+    Checkpoints(tmp_path).restore(renamed, config)
