@@ -135,3 +135,20 @@ def test_objects_placed_into_each_other_are_named_by_both_lines(tmp_path):
   assert len(found) == 1 and f'{path}:1 and line 2' in found[0]
   path.write_text('cube red 0 0 0\ncube blue 0.051 0 0\ncube green 0 0 0 0.077\n')  # touching
   assert overlaps(read_case(path), env) == []
+
+
+def test_mvcoba_authors_block_table(tmp_path):
+  """Their 1.obj is the 5 cm cube (VPG's 1.obj is the 10 cm arch): a 2 x 3 grid at 5.7 cm pitch
+  reads as six apart cubes with their table and as overlapping arches with VPG's, refused."""
+  path = tmp_path / 'grid.txt'
+  path.write_text(''.join(f'1.obj 0.1 0.2 0.3 {-0.5 + 0.057 * i:.3f} {0.057 * j:.3f} 0.026 0 0 0\n'
+                          for i in range(2) for j in range(3)))
+  env = Tabletop(resolve('default', ['scene.pool=cube:6,arch:6', 'env.num_objects=6']))
+  theirs = read_case(path, blocks='mvcoba')
+  assert [o.shape for o in theirs.objects] == ['cube'] * 6
+  assert overlaps(theirs, env) == []
+  vpg = read_case(path)
+  assert [o.shape for o in vpg.objects] == ['arch'] * 6
+  assert any('interpenetrate' in m for m in overlaps(vpg, env))
+  with pytest.raises(ScenarioError, match="unknown block table 'lego'"):
+    read_case(path, blocks='lego')

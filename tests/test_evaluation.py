@@ -78,6 +78,21 @@ def test_malformed_case_fails_with_file_and_line_before_compiling(tmp_path, caps
   assert 'bad.scn:2' in err and "'x'" in err
 
 
+def test_overlapping_case_is_refused_before_compiling_naming_both_lines(tmp_path, capsys):
+  """Six 1.obj blocks at 5.7 cm pitch: arches in VPG's block table, which overlap; cubes in the
+  MV-COBA authors' table, which do not."""
+  grid = tmp_path / 'grid.txt'
+  grid.write_text(''.join(f'1.obj 0.1 0.2 0.3 {-0.5 + 0.057 * i:.3f} {0.057 * j:.3f} 0.026 0 0 0\n'
+                          for i in range(2) for j in range(3)))
+  args = ['--baseline', 'heuristic', '--suite', str(grid), '--out', str(tmp_path / 'out')]
+  assert eval_cli.main(args) == 2
+  err = capsys.readouterr().err
+  assert err.startswith('error: ') and f'{grid}:1 and line 2' in err and '--allow-overlaps' in err
+  assert not (tmp_path / 'out').exists()
+  assert eval_cli.main(args + ['--blocks', 'lego']) == 2
+  assert "unknown block table 'lego'" in capsys.readouterr().err
+
+
 def test_eval_cli_writes_tables_and_visuals(setup, tmp_path, capsys):
   folder = setup[0]
   code = eval_cli.main(['--baseline', 'heuristic', '--suite', str(folder), '--config',

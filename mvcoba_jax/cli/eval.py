@@ -68,6 +68,9 @@ def main(argv=None) -> int:
   parser.add_argument('--seed', type=int, default=0)
   parser.add_argument('--save-visuals', action='store_true',
                       help='write a PNG strip of heightmaps and actions per run')
+  parser.add_argument('--blocks', nargs='+', default=[], metavar='[SUITE=]TABLE',
+                      help='block table for VPG-format (.txt) case files: vpg (default), mvcoba '
+                           '(the MV-COBA authors\' block set); SUITE=TABLE for one suite only')
   parser.add_argument('--allow-overlaps', action='store_true',
                       help='evaluate cases whose objects interpenetrate as placed (refused '
                            'otherwise: such a case bursts apart as it settles)')
@@ -93,7 +96,9 @@ def main(argv=None) -> int:
   try:  # everything that can be wrong with the input fails here, before any compile
     base = config_lib.from_arguments(args)
     bounds = base.scene.workspace_half, base.scene.workspace_top
-    suites = {name: [read_case(f, *bounds) for f in files]
+    tables = dict(b.rpartition('=')[::2] for b in args.blocks)  # suite ('' for all) -> table
+    suites = {name: [read_case(f, *bounds, blocks=tables.get(name, tables.get('', 'vpg')))
+                     for f in files]
               for name, files in suite_files(args.suite).items()}
     overlapping = [m for cases in suites.values() for m in evaluation.case_problems(cases, base)]
     sources = [load(d) for d in args.checkpoint] + ([args.baseline] if args.baseline else [])

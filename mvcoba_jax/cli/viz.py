@@ -25,12 +25,15 @@ def main(argv=None) -> int:
   parser.add_argument('case', help='scenario file (.scn or VPG .txt)')
   parser.add_argument('--out', default='viz', help='output folder')
   parser.add_argument('--settle', action='store_true', help='let the physics settle the case first')
+  parser.add_argument('--blocks', default='vpg',
+                      help='block table of a VPG-format case: vpg or mvcoba (the MV-COBA authors\')')
   config_lib.add_arguments(parser)
   args = parser.parse_args(argv)
   try:
     env = Tabletop(config_lib.from_arguments(args))
     scene = env.config.scene
-    layout = case_to_layout(read_case(args.case, scene.workspace_half, scene.workspace_top), env)
+    case = read_case(args.case, scene.workspace_half, scene.workspace_top, args.blocks)
+    layout = case_to_layout(case, env)
   except (config_lib.ConfigError, ScenarioError) as e:
     parser.error(str(e))
   runtime.setup()

@@ -267,17 +267,18 @@ def _vpg_pose(shape: str, euler, z: float):
   return euler_xyz_matrix(0.0, 0.0, yaw) @ base, float(faces[up]) + DROP_GAP
 
 
-def _read_vpg(path, text: str):
+def _read_vpg(path, text: str, blocks: str):
+  table = shapes.BLOCK_TABLES[blocks]
   objects, parked = [], []
   for n, raw in enumerate(text.split('\n'), 1):
     fields = raw.split()
     if not fields:
       continue
     _check_count(path, n, fields, _VPG_FIELDS)
-    if fields[0] not in shapes.VPG_FILE_TO_SHAPE:
-      raise _error(path, n, 'mesh', f'unknown VPG mesh {fields[0]!r}; known: '
-                   f'{", ".join(shapes.VPG_FILE_TO_SHAPE)}')
-    shape = shapes.VPG_FILE_TO_SHAPE[fields[0]]
+    if fields[0] not in table:
+      raise _error(path, n, 'mesh', f'unknown mesh {fields[0]!r} in the {blocks!r} block table; '
+                   f'known: {", ".join(table)}')
+    shape = table[fields[0]]
     values = [_number(path, n, name, t) for name, t in zip(_VPG_FIELDS[1:], fields[1:])]
     color, xyz, euler = values[:3], values[3:6], values[6:]
     for name, c in zip(_VPG_FIELDS[1:4], color):
@@ -315,12 +316,17 @@ def _read_text(path: pathlib.Path) -> str:
     raise ScenarioError(f'{path}:{line}: not UTF-8 text (byte {data[e.start]:#04x})') from None
 
 
-def read_case(path, workspace_half: float = 0.224, workspace_top: float = 0.4) -> Case:
+def read_case(path, workspace_half: float = 0.224, workspace_top: float = 0.4,
+              blocks: str = 'vpg') -> Case:
   """Loads a case: `.scn` in our format, `.txt` in VPG's.
 
   `workspace_half` and `workspace_top` bound the objects of `.scn` files; VPG files use VPG's own
   workspace box, and their lines outside it (objects VPG parked) are kept in `parked_lines`.
+  `blocks` names the table of `shapes.BLOCK_TABLES` that VPG files' mesh names are read with.
   """
+  if blocks not in shapes.BLOCK_TABLES:
+    raise ScenarioError(f'unknown block table {blocks!r}; known: '
+                        f'{", ".join(shapes.BLOCK_TABLES)}')
   path = pathlib.Path(path)
   if path.suffix not in ('.scn', '.txt'):
     raise ScenarioError(f'{path}: unknown case format {path.suffix!r}; expected .scn (ours) or '
@@ -330,7 +336,7 @@ def read_case(path, workspace_half: float = 0.224, workspace_top: float = 0.4) -
   if path.suffix == '.scn':
     objects, occluders = _read_scn(path, text, workspace_half, workspace_top)
   else:
-    objects, occluders, parked = _read_vpg(path, text)
+    objects, occluders, parked = _read_vpg(path, text, blocks)
   if not objects:
     where = (f'; its {len(parked)} lines ({", ".join(map(str, parked[:10]))}) all lie outside '
              'VPG\'s workspace, where VPG parks unused objects') if parked else ''

@@ -101,7 +101,24 @@ SHAPES: dict[str, Shape] = {s.name: s for s in [
 ]}
 
 SHAPE_NAMES = tuple(SHAPES)
-VPG_FILE_TO_SHAPE = {s.vpg_file: s.name for s in SHAPES.values()}
+# Block tables: the shape each mesh file name of a VPG-format case file stands for. Files written by
+# other simulators number their blocks differently; a table is chosen per suite (`--blocks`).
+# 'mvcoba': the MV-COBA authors' block set, whose 0.obj is the short polygonal prism (VPG's 2.obj,
+# axis along x) and 1.obj the 5 cm cube (VPG's 4.obj); 7.obj is taken as VPG's disk.
+# Another table is one more entry here (`add_block_table`).
+BLOCK_TABLES = {
+    'vpg': {s.vpg_file: s.name for s in SHAPES.values()},
+    'mvcoba': {'0.obj': 'octagon', '1.obj': 'cube', '2.obj': 'octagon', '3.obj': 'flat_box',
+               '4.obj': 'cube', '6.obj': 'tall_box', '7.obj': 'disk', '8.obj': 'cylinder'},
+}
+
+
+def add_block_table(name: str, table: dict[str, str]) -> None:
+  """Registers a block table: mesh file name -> one of SHAPE_NAMES."""
+  unknown = sorted(set(table.values()) - set(SHAPE_NAMES))
+  if unknown:
+    raise ValueError(f'block table {name!r}: unknown shapes {", ".join(unknown)}')
+  BLOCK_TABLES[name] = dict(table)
 
 
 def footprint_radius(name: str) -> float:
