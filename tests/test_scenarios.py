@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from mvcoba_jax.config import resolve
-from mvcoba_jax.evaluation import pool_for, suite_config
+from mvcoba_jax.evaluation import case_problems, pool_for, suite_config
+from mvcoba_jax.occlusion import visibility
 from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.geometry import quat_mul, yaw_quat
 from mvcoba_jax.sim.scenarios import (
@@ -26,7 +27,7 @@ from mvcoba_jax.sim.scenarios import (
 )
 from mvcoba_jax.sim.scene import GRIPPER_PARK, park_position
 from mvcoba_jax.sim.tabletop import Tabletop
-from mvcoba_jax.suites import SUITES_DIR, generate
+from mvcoba_jax.suites import SUITES_DIR, generate, suite_files
 from tests.penetration import max_penetration
 
 VPG_CASES = SUITES_DIR / 'vpg'
@@ -305,3 +306,20 @@ def test_case_to_layout_places_occluders(tmp_path):
   np.testing.assert_allclose(layout.occluder_pos[1], (0.3, 0.0, 0.1), atol=1e-6)
   np.testing.assert_allclose(layout.occluder_quat[1], yaw_quat(math.pi / 2), atol=1e-6)
   np.testing.assert_allclose(layout.quat[0], quat_mul(yaw_quat(0.0), np.array([1.0, 0, 0, 0])))
+
+
+def test_every_object_of_the_occluded_suite_is_seen_by_a_camera():
+  """The occluded suite tests the fusion of two views: at the start each object shows at least
+  half of itself to one camera, some to one camera only, and camera 1 sees nothing in case 00."""
+  cases = [read_case(f) for f in sorted((SUITES_DIR / 'occluded').glob('*.scn'))]
+  rows = visibility(cases, resolve('default'))
+  assert [r['seen_by_none'] for r in rows] == [[], [], []]
+  assert all(r['seen_by_one_only'] for r in rows)
+  assert all(o['visible_fraction'][0] == 0.0 for o in rows[0]['objects'])
+
+
+def test_shipped_cases_pass_the_load_check():
+  """No shipped case holds objects that interpenetrate as placed."""
+  for suite in ('random', 'ordered', 'occluded', 'isolated', 'vpg'):
+    cases = [read_case(f) for f in suite_files([suite])[suite]]
+    assert case_problems(cases, resolve('default')) == [], suite

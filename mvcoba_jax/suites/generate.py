@@ -94,7 +94,9 @@ def ordered_cases() -> list[str]:
 
 
 def occluded_cases() -> list[str]:
-  """Occluder 0 hides the whole workspace from camera 1; occluders 1 and 2 hide a part each."""
+  """Occluder 0 hides the whole workspace from camera 1; in the other two cases occluders 1 and 2
+  each hide a part from one camera, so that some objects are seen by one camera only and every
+  object by at least one (`benchmarks/occlusion.py`; tests/test_scenarios.py checks it)."""
   objects = [line('cube', 'blue', 0.1, 0.12, 10), line('cube', 'green', -0.1, -0.12, 30),
              line('cylinder', 'brown', 0.0, 0.0, 0), line('flat_box', 'orange', -0.08, 0.08, 45),
              line('disk', 'yellow', 0.08, -0.08, 0)]
@@ -104,11 +106,15 @@ def occluded_cases() -> list[str]:
              'occluder 2 -0.275 -0.036 0.470 0\n')
   partial_b = ('occluder 1  0.275 -0.036 0.470 0\n'
                'occluder 2 -0.275  0.036 0.470 0\n')
+  spread = [line('cube', 'blue', 0.1, 0.12, 10), line('cube', 'green', -0.1, -0.12, 30),
+            line('cylinder', 'brown', -0.12, 0.12, 0), line('flat_box', 'orange', 0.12, -0.1, 45),
+            line('disk', 'yellow', -0.17, 0.0, 0), line('prism', 'red', 0.17, 0.0, 0)]
   mirrored = [line('cube', 'blue', 0.1, -0.12, 10), line('cube', 'green', -0.1, 0.12, 30),
-              line('tall_box', 'purple', 0.0, 0.05, 0), line('arch', 'cyan', -0.05, -0.06, 90)]
+              line('tall_box', 'purple', 0.15, 0.12, 0), line('arch', 'cyan', -0.14, -0.12, 90),
+              line('prism', 'red', 0.0, 0.17, 0)]
   return [HEADER + ''.join(objects) + isolated + full,
-          HEADER + ''.join(objects) + isolated + partial,
-          HEADER + ''.join(mirrored) + isolated + partial_b]
+          HEADER + ''.join(spread) + partial,
+          HEADER + ''.join(mirrored) + partial_b]
 
 
 def isolated_cases() -> list[str]:
