@@ -23,19 +23,13 @@ from physics import settings  # noqa: E402
 
 from mvcoba_jax import evaluation  # noqa: E402
 from mvcoba_jax.config import resolve  # noqa: E402
-from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
-from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
+from mvcoba_jax.sim.scenarios import read_case  # noqa: E402
 from mvcoba_jax.suites import suite_files  # noqa: E402
 
 
 def settle(files: list[pathlib.Path], keys: int, edge: float) -> list[dict]:
   cases = [read_case(f) for f in files]
-  env = Tabletop(evaluation.suite_config(resolve(None), evaluation.pool_for(cases)))
-  layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(keys)])
-  run_keys = jax.random.split(jax.random.PRNGKey(0), len(cases) * keys)
-  start = jax.jit(jax.vmap(lambda layout, key: env.reset_from_case(
-      evaluation.jitter(layout, key), key)))
-  states = start(layouts, run_keys)
+  env, states = evaluation.settled_starts(cases, resolve(None), keys)
   xy = np.abs(np.asarray(jax.vmap(env.object_positions)(states))[..., :2]).max(axis=-1)
   play = np.asarray(states.in_play)
   near = play & (xy > env.config.scene.workspace_half - edge)

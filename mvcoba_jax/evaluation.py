@@ -21,7 +21,7 @@ from mvcoba_jax import agent, networks, perception, task
 from mvcoba_jax.config import Config
 from mvcoba_jax.metrics import RunLog
 from mvcoba_jax.sim.geometry import pixel_to_world, quat_mul, yaw_quat
-from mvcoba_jax.sim.scenarios import case_to_layout, overlaps
+from mvcoba_jax.sim.scenarios import case_to_layout, overlaps, stack_layouts
 from mvcoba_jax.sim.tabletop import Layout, Tabletop, where_envs
 
 POSITION_NOISE = 0.002  # m, per axis, on each object's start position
@@ -214,6 +214,16 @@ def suite_config(config, pool):
                               max_geom_pairs=max(config.scene.max_geom_pairs, 2 * slots))
   env = dataclasses.replace(config.env, num_objects=min(config.env.num_objects, slots))
   return dataclasses.replace(config, scene=scene, env=env)
+
+
+def settled_starts(cases, config, runs: int, seed: int = 0):
+  """The environment and the settled start states (len(cases) * runs,) of a suite's runs, exactly
+  as `mvcoba-eval --runs runs --seed seed` starts them: same scene, same placement jitter."""
+  env = Tabletop(suite_config(config, pool_for(cases)))
+  layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
+  keys = jax.random.split(jax.random.PRNGKey(seed), len(cases) * runs)
+  start = jax.jit(jax.vmap(lambda layout, key: env.reset_from_case(jitter(layout, key), key)))
+  return env, start(layouts, keys)
 
 
 def case_problems(cases, config) -> list[str]:
