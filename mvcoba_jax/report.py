@@ -8,7 +8,9 @@ import math
 import os
 import pathlib
 
-from mvcoba_jax import metrics
+import numpy as np
+
+from mvcoba_jax import intervals, metrics
 
 METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action efficiency (%)'),
            ('completion', 'completion (%)'), ('objects_picked', 'objects picked (%)'),
@@ -19,7 +21,6 @@ class ResultsError(ValueError):
   """An earlier evaluation's results.json that --tables cannot use."""
 
 
-
 def row_labels(directories: list[str], methods: list[str]) -> list[str]:
   """Table rows of the checkpoints: the method, with the run's folder when a method repeats."""
   repeated = {m for m in methods if methods.count(m) > 1}
@@ -27,13 +28,11 @@ def row_labels(directories: list[str], methods: list[str]) -> list[str]:
           for d, m in zip(directories, methods)]
 
 
-
 def json_safe(tree):
   """`tree` with NaN and infinities (undefined metrics) as null, which JSON can hold."""
   if isinstance(tree, dict):
     return {k: json_safe(v) for k, v in tree.items()}
   return None if isinstance(tree, float) and not math.isfinite(tree) else tree
-
 
 
 def table(rows: dict[str, dict[str, dict]], key: str, label: str, cases: list[str]) -> str:
@@ -47,12 +46,49 @@ def table(rows: dict[str, dict[str, dict]], key: str, label: str, cases: list[st
   return '\n'.join(lines)
 
 
-
 def suite_tables(suite: str, rows: dict[str, dict]) -> list[str]:
-  """One Markdown table per metric of a suite; its columns are every case any method ran."""
+  """One Markdown table per metric of a suite (its columns are every case any method ran), after
+  the table of intervals over training seeds when a method was evaluated from several."""
   cases = list(dict.fromkeys(c for result in rows.values() for c in result['cases']))
-  return [f'### {suite}: {label}\n\n' + table(rows, key, label, cases) for key, label in METRICS]
+  tables = [f'### {suite}: {label}\n\n' + table(rows, key, label, cases) for key, label in METRICS]
+  over_seeds = seed_intervals(rows)
+  if over_seeds:
+    tables.insert(0, f'### {suite}: over training seeds, mean [95% CI]\n\n'
+                  + interval_table(over_seeds))
+  return tables
 
+
+def method_of(label: str) -> str:
+  """The method of a row label (`row_labels` adds the run's folder when a method repeats)."""
+  return label.split(' (')[0]
+
+
+def seed_intervals(rows: dict[str, dict]) -> dict[str, dict]:
+  """Per method evaluated from two or more checkpoints (training seeds): each metric's mean
+  over seeds and cases with its 95% stratified bootstrap interval (`intervals.interval`), over
+  the cases every checkpoint ran; None where a metric is undefined in some case."""
+  groups = {}
+  for label, result in rows.items():
+    groups.setdefault(method_of(label), []).append(result)
+  out = {}
+  for method, results in groups.items():
+    if len(results) < 2:
+      continue
+    cases = [c for c in results[0]['cases'] if all(c in r['cases'] for r in results)]
+    entry = {'seeds': len(results), 'cases': len(cases)}
+    for key, _ in METRICS:
+      scores = np.array([[r['cases'][c][key] for c in cases] for r in results], np.float64)
+      entry[key] = intervals.interval(scores) if np.isfinite(scores).all() else None
+    out[method] = entry
+  return out
+
+
+def interval_table(over_seeds: dict[str, dict]) -> str:
+  head = ('| method | seeds | ' + ' | '.join(label for _, label in METRICS) + ' |\n|---|---|'
+          + '---|' * len(METRICS))
+  cell = lambda v: '-' if v is None else f'{v[0]:.1f} [{v[1]:.1f}, {v[2]:.1f}]'
+  return '\n'.join([head] + [f'| {m} | {e["seeds"]} | ' + ' | '.join(cell(e[k]) for k, _ in METRICS)
+                             + ' |' for m, e in over_seeds.items()])
 
 
 def scored(by_case: dict[str, list[metrics.RunLog]], wall_s: float) -> dict:
@@ -61,7 +97,6 @@ def scored(by_case: dict[str, list[metrics.RunLog]], wall_s: float) -> dict:
   return {'cases': per_case, 'mean': metrics.suite_average(per_case), 'wall_s': wall_s,
           'runs': {name: [dataclasses.asdict(log) for log in logs]
                    for name, logs in by_case.items()}}
-
 
 
 def loss_summary(lost: list[dict]) -> str:
@@ -74,7 +109,6 @@ def loss_summary(lost: list[dict]) -> str:
           'the border): losses.json')
 
 
-
 def write_report(report: dict, out: pathlib.Path) -> str:
   """Writes results.json and results.md (each replaced whole, never half written); the Markdown."""
   text = '\n\n'.join(t for suite, rows in report.items() for t in suite_tables(suite, rows)) + '\n'
@@ -84,7 +118,6 @@ def write_report(report: dict, out: pathlib.Path) -> str:
     partial.write_text(content)
     os.replace(partial, out / name)
   return text
-
 
 
 def joined_report(folders: list[str]) -> dict:

@@ -1,0 +1,49 @@
+"""Interval estimates over training seeds, on synthetic scores with known answers, and the
+report's table of them."""
+import math
+
+import numpy as np
+import pytest
+
+from mvcoba_jax import intervals, report
+
+
+def test_two_seeds_that_disagree_in_every_case():
+  """Seeds score 0 and 1 in each of 3 cases: a resample's mean is k/6 with k ~ Binomial(6, 1/2);
+  its 2.5th and 97.5th percentiles are 1/6 and 5/6 exactly."""
+  point, low, high = intervals.interval(np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]))
+  assert (point, low, high) == pytest.approx((0.5, 1 / 6, 5 / 6))
+
+
+def test_interval_of_many_normal_seeds_matches_the_normal_theory():
+  scores = np.random.default_rng(0).normal(0.6, 0.1, size=(60, 5))
+  point, low, high = intervals.interval(scores)
+  half = 1.96 * 0.1 / math.sqrt(scores.size)
+  assert low < 0.6 < high and (high - low) / 2 == pytest.approx(half, rel=0.2)
+
+
+def test_degenerate_and_single_seed_scores():
+  assert intervals.interval(np.full((3, 4), 0.7)) == pytest.approx((0.7, 0.7, 0.7))
+  point, low, high = intervals.interval(np.array([[0.5, 0.6]]))
+  assert point == pytest.approx(0.55) and math.isnan(low) and math.isnan(high)
+  with pytest.raises(ValueError, match='finite'):
+    intervals.interval(np.array([[0.5, np.nan]]))
+
+
+def test_separated_only_when_disjoint():
+  assert intervals.separated((0.8, 0.75, 0.85), (0.5, 0.4, 0.6))
+  assert not intervals.separated((0.8, 0.55, 0.85), (0.5, 0.4, 0.6))
+  assert not intervals.separated((0.8, math.nan, math.nan), (0.5, 0.4, 0.6))
+
+
+def test_report_gives_intervals_for_methods_evaluated_from_several_seeds():
+  def row(grasp):
+    cases = {c: {key: grasp + i for key, _ in report.METRICS} for i, c in enumerate('ab')}
+    return {'cases': cases, 'mean': {key: grasp + 0.5 for key, _ in report.METRICS}}
+  rows = {'mvcoba (s0)': row(70.0), 'mvcoba (s1)': row(80.0), 'vpg': row(60.0)}
+  over = report.seed_intervals(rows)
+  assert list(over) == ['mvcoba'] and over['mvcoba']['seeds'] == 2
+  point, low, high = over['mvcoba']['grasp_success']
+  assert point == pytest.approx(75.5) and low < point < high
+  text = report.suite_tables('ordered', rows)[0]
+  assert text.startswith('### ordered: over training seeds') and '| mvcoba | 2 | 75.5 [' in text
