@@ -13,6 +13,7 @@ import pytest
 from mvcoba_jax import agent, networks
 from mvcoba_jax import replay as replay_lib
 from mvcoba_jax.checkpoint import Checkpoints
+from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.cli import train as train_cli
 from mvcoba_jax.config import resolve
 from mvcoba_jax.training import Trainer
@@ -205,3 +206,27 @@ def test_sigkill_while_writing_a_checkpoint_loses_nothing_older(tmp_path):
     np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
   records = [json.loads(line) for line in (killed / 'actions.jsonl').read_text().splitlines()]
   assert [r['action'] for r in records] == list(range(12))
+
+
+def test_sweep_of_methods_and_seeds_trains_evaluates_and_aggregates(tmp_path, capsys):
+  """2 methods x 2 seeds train in turn into their own folders; one evaluation of all four gives
+  each method's mean and interval over its seeds."""
+  sweep = tmp_path / 'sweep'
+  assert train_cli.main(['--config', TINY, '--workdir', str(sweep), '--eval-actions', '1',
+                         '--methods', 'mvcoba', 'grasp_only', '--seeds', '0', '1',
+                         '--set', 'train.total_actions=4']) == 0
+  runs = sorted(p.name for p in sweep.iterdir())
+  assert runs == ['grasp_only-s0', 'grasp_only-s1', 'mvcoba-s0', 'mvcoba-s1']
+  assert all(json.loads((sweep / r / 'config.json').read_text())['seed'] == int(r[-1])
+             for r in runs)
+  case = tmp_path / 'case.scn'
+  case.write_text('cube red 0.0 0.0 0\nflat_box blue 0.1 0.1 0\n')
+  out = tmp_path / 'eval'
+  assert eval_cli.main(['--checkpoint', *(str(sweep / r) for r in runs), '--suite', str(case),
+                        '--runs', '2', '--max-actions', '2', '--out', str(out)]) == 0
+  text = (out / 'results.md').read_text()
+  assert 'over training seeds, mean [95% CI]' in text
+  assert '| mvcoba | 2 |' in text and '| grasp_only | 2 |' in text
+  with pytest.raises(SystemExit):  # a sweep and a single run at once
+    train_cli.main(['--config', TINY, '--workdir', str(sweep), '--methods', 'mvcoba',
+                    '--method', 'vpg'])

@@ -1,12 +1,16 @@
 """Trains a push-and-grasp Q-network on B tabletops in lockstep, then runs a short evaluation.
 
   mvcoba-train [--config default|paper|tiny|FILE] [--method mvcoba|mvcoba_2fcn|vpg|grasp_only]
-                  [--set key=value ...] [--seed N] [--workdir runs/NAME] [--resume]
-                  [--distributed [--coordinator HOST:PORT --num-processes N --process-id I]]
+               [--set key=value ...] [--seed N] [--workdir runs/NAME] [--resume]
+               [--distributed [--coordinator HOST:PORT --num-processes N --process-id I]]
+  mvcoba-train --methods mvcoba vpg --seeds 0 1 2 --workdir runs/sweep [--resume]
 
 The work directory gets config.json (the resolved config), actions.jsonl (one line per action),
 metrics.jsonl (one line per host iteration), checkpoints/ (Orbax, atomic, resumable) and
-curves.png (grasp success and action efficiency over the last 200 attempts).
+curves.png (grasp success and action efficiency over the last 200 attempts). With `--methods`
+or `--seeds` it is a sweep folder: every method x seed trains in turn into its own
+`METHOD-sSEED/`; `--resume` continues those with a checkpoint and starts the others, and
+`mvcoba-eval --checkpoint runs/sweep/*` gives each method's interval over the seeds.
 """
 from __future__ import annotations
 
@@ -39,6 +43,10 @@ def parse(argv):
   config_lib.add_arguments(parser)
   parser.add_argument('--method', choices=methods.names(), help='sets network.method')
   parser.add_argument('--seed', type=int, help='sets seed')
+  parser.add_argument('--methods', nargs='+', choices=methods.names(),
+                      help='a sweep: train each of these methods (with each of --seeds)')
+  parser.add_argument('--seeds', nargs='+', type=int,
+                      help='a sweep: train with each of these seeds (and each of --methods)')
   parser.add_argument('--workdir', default='runs/train', help='output folder')
   parser.add_argument('--resume', action='store_true', help='continue from the latest checkpoint')
   parser.add_argument('--distributed', action='store_true',
@@ -54,25 +62,47 @@ def parse(argv):
   cluster = (args.coordinator, args.num_processes, args.process_id)
   if not args.distributed and any(v is not None for v in cluster):
     parser.error('--coordinator, --num-processes and --process-id need --distributed')
-  overrides = list(args.overrides)
-  if args.method:
-    overrides.append(f'network.method={args.method}')
-  if args.seed is not None:
-    overrides.append(f'seed={args.seed}')
-  try:
-    config = config_lib.resolve(args.config, overrides)
-  except config_lib.ConfigError as e:
-    parser.error(str(e))
-  return args, config
+  if args.method and args.methods or args.seed is not None and args.seeds:
+    parser.error('give --method/--seed for one run or --methods/--seeds for a sweep, not both')
+  sweep = bool(args.methods or args.seeds)
+  runs = {}  # work directory -> config
+  for method in args.methods or [args.method]:
+    for seed in args.seeds or [args.seed]:
+      overrides = list(args.overrides)
+      if method:
+        overrides.append(f'network.method={method}')
+      if seed is not None:
+        overrides.append(f'seed={seed}')
+      try:
+        config = config_lib.resolve(args.config, overrides)
+      except config_lib.ConfigError as e:
+        parser.error(str(e))
+      name = f'{config.network.method}-s{config.seed}'
+      runs[pathlib.Path(args.workdir) / name if sweep else pathlib.Path(args.workdir)] = config
+  return args, runs, sweep
 
 
 def main(argv=None) -> int:
-  args, config = parse(argv)
+  args, runs, sweep = parse(argv)
   if args.distributed:
     jax.distributed.initialize(coordinator_address=args.coordinator,
                                num_processes=args.num_processes, process_id=args.process_id)
-  workdir = pathlib.Path(args.workdir)
-  if args.resume and not holds_checkpoint(workdir):  # before anything is created or compiled
+  if sweep and args.resume and not any(holds_checkpoint(w) for w in runs):
+    print(f'error: --resume: no run of the sweep in {args.workdir} holds a checkpoint',
+          file=sys.stderr)
+    return 2
+  for i, (workdir, config) in enumerate(runs.items()):
+    if sweep:
+      print(f'sweep {i + 1}/{len(runs)}: {workdir}', flush=True)
+    code = train(args, config, workdir, args.resume and (holds_checkpoint(workdir) or not sweep))
+    if code:
+      return code
+  return 0
+
+
+def train(args, config, workdir: pathlib.Path, resume: bool) -> int:
+  """One training run into `workdir` (resumed from its latest checkpoint with `resume`)."""
+  if resume and not holds_checkpoint(workdir):  # before anything is created or compiled
     print(f'error: --resume: {workdir / "checkpoints"} holds no checkpoint', file=sys.stderr)
     return 2
   devices = sharding.mesh()
@@ -95,7 +125,7 @@ def main(argv=None) -> int:
         flush=True)
   state = jax.jit(trainer.init)(jax.random.PRNGKey(config.seed))
   actions_path, metrics_path = workdir / 'actions.jsonl', workdir / 'metrics.jsonl'
-  if args.resume:
+  if resume:
     try:
       state, meta = checkpoints.restore(state, config)
     except CheckpointError as e:
