@@ -41,11 +41,12 @@ def main():
     rows, series = {}, []
     for d in dirs:
       run = read(pathlib.Path(d))
-      success = np.array([r['grasp_success'] for r in run['records']], float)
-      primitives = np.array([r['primitive'] == 'grasp' for r in run['records']], int)
-      (gx, gy), _ = curves.training_curves(primitives, success, args.window)
-      ax.plot(gx, 100 * gy, color=color, alpha=0.3, linewidth=0.8)
-      series.append(np.interp(np.arange(1, len(run['records']) + 1), gx, gy))
+      grasp_success, _ = curves.on_actions([r['primitive'] == 'grasp' for r in run['records']],
+                                           [r['grasp_success'] for r in run['records']],
+                                           args.window)
+      ax.plot(np.arange(1, len(grasp_success) + 1), 100 * grasp_success, color=color, alpha=0.3,
+              linewidth=0.8)
+      series.append(grasp_success)
       last = run['grasps'][-args.window:]
       rows[d] = {'actions': len(run['records']), 'grasps': len(run['grasps']),
                  'pushes': len(run['records']) - len(run['grasps']),

@@ -41,3 +41,37 @@ def plot(primitives, successes, window: int, path: str | pathlib.Path, title: st
     fig.suptitle(title)
   fig.tight_layout()
   fig.savefig(path, dpi=100)
+
+
+def on_actions(primitives, successes, window: int) -> tuple[np.ndarray, np.ndarray]:
+  """Both curves of one run at every training action (grasp success held between grasps)."""
+  (gx, gy), (_, efficiency) = training_curves(np.asarray(primitives), np.asarray(successes),
+                                              window)
+  actions = np.arange(1, len(primitives) + 1)
+  return np.interp(actions, gx, gy) if len(gx) else np.zeros(len(actions)), efficiency
+
+
+def plot_groups(groups: dict[str, list[tuple[np.ndarray, np.ndarray]]], window: int,
+                folder: str | pathlib.Path) -> list[pathlib.Path]:
+  """One PNG per metric (curves-grasp_success.png, curves-action_efficiency.png): per group
+  (a method), the mean over its runs (seeds) with a band from their lowest to their highest."""
+  paths = []
+  for m, (metric, label) in enumerate((('grasp_success', f'grasp success (last {window} grasps)'),
+                                       ('action_efficiency',
+                                        f'action efficiency (last {window} actions)'))):
+    fig = Figure(figsize=(8, 4.5))
+    ax = fig.subplots()
+    for name, runs in groups.items():
+      length = min(len(run[0]) for run in runs)
+      series = np.stack([run[m][:length] for run in runs])
+      actions = np.arange(1, length + 1)
+      line, = ax.plot(actions, 100 * series.mean(axis=0), label=f'{name} ({len(runs)} seeds)')
+      ax.fill_between(actions, 100 * series.min(axis=0), 100 * series.max(axis=0),
+                      color=line.get_color(), alpha=0.2)
+    ax.set(xlabel='training actions', ylabel=f'{label} (%)', ylim=(0, 100))
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    paths.append(pathlib.Path(folder) / f'curves-{metric}.png')
+    fig.savefig(paths[-1], dpi=100)
+  return paths

@@ -56,3 +56,17 @@ def plot_curves(workdir: pathlib.Path, records: list[dict], config) -> pathlib.P
               [r['grasp_success'] for r in records], config.train.curve_window, path,
               title=f'{config.network.method}, {config.num_envs} tabletops')
   return path
+
+
+def plot_sweep(workdirs: list[pathlib.Path], window: int,
+               folder: pathlib.Path) -> list[pathlib.Path]:
+  """The sweep's curves: its runs grouped by method (`plot_groups`)."""
+  groups = {}
+  for workdir in workdirs:
+    method = json.loads((workdir / 'config.json').read_text())['network']['method']
+    records = read_records(workdir / 'actions.jsonl', below=10 ** 12)
+    groups.setdefault(method, []).append(curves.on_actions(
+        [r['primitive'] == 'grasp' for r in records], [r['grasp_success'] for r in records],
+        window))
+  return curves.plot_groups(groups, window, folder)
+

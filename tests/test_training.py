@@ -215,8 +215,10 @@ def test_sweep_of_methods_and_seeds_trains_evaluates_and_aggregates(tmp_path, ca
   assert train_cli.main(['--config', TINY, '--workdir', str(sweep), '--eval-actions', '1',
                          '--methods', 'mvcoba', 'grasp_only', '--seeds', '0', '1',
                          '--set', 'train.total_actions=4']) == 0
-  runs = sorted(p.name for p in sweep.iterdir())
+  runs = sorted(p.name for p in sweep.iterdir() if p.is_dir())
   assert runs == ['grasp_only-s0', 'grasp_only-s1', 'mvcoba-s0', 'mvcoba-s1']
+  assert (sweep / 'curves-grasp_success.png').is_file()
+  assert (sweep / 'curves-action_efficiency.png').is_file()
   assert all(json.loads((sweep / r / 'config.json').read_text())['seed'] == int(r[-1])
              for r in runs)
   case = tmp_path / 'case.scn'

@@ -31,6 +31,7 @@ from mvcoba_jax.checkpoint import CheckpointError, Checkpoints, holds_checkpoint
 from mvcoba_jax.run_log import (
   action_records,
   plot_curves,
+  plot_sweep,
   read_records,
   summary,
   write_records,
@@ -97,6 +98,10 @@ def main(argv=None) -> int:
     code = train(args, config, workdir, args.resume and (holds_checkpoint(workdir) or not sweep))
     if code:
       return code
+  if sweep and jax.process_index() == 0:
+    window = next(iter(runs.values())).train.curve_window
+    for path in plot_sweep(list(runs), window, pathlib.Path(args.workdir)):
+      print(f'sweep curves: {path}')
   return 0
 
 
@@ -162,8 +167,8 @@ def train(args, config, workdir: pathlib.Path, resume: bool) -> int:
     iteration += 1
     so_far = summary(records)
     rate = (int(state.actions) - done_before) / (time.perf_counter() - start)
-    line = {'iteration': iteration, 'actions': int(state.actions), 'wall_s': time.perf_counter() - t0,
-            'actions_per_s': rate, 'loss': float(np.mean(np.asarray(log.loss))),
+    line = {'iteration': iteration, 'actions': int(state.actions),
+            'wall_s': time.perf_counter() - t0, 'actions_per_s': rate, 'loss': float(np.mean(np.asarray(log.loss))),
             'epsilon': float(np.asarray(log.epsilon)[-1]), 'episodes': int(state.episodes),
             'updates': int(state.updates), 'skipped_updates': int(state.skipped_updates),
             'health_resets': int(state.env.health_resets.sum()),
