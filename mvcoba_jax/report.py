@@ -63,8 +63,8 @@ def method_of(label: str) -> str:
   return label.split(' (')[0]
 
 
-def seed_intervals(rows: dict[str, dict]) -> dict[str, dict]:
-  """Per method evaluated from two or more checkpoints (training seeds): each metric's mean
+def seed_intervals(rows: dict[str, dict], minimum: int = 2) -> dict[str, dict]:
+  """Per method evaluated from `minimum` or more checkpoints (training seeds): each metric's mean
   over seeds and cases with its 95% stratified bootstrap interval (`intervals.interval`), over
   the cases every checkpoint ran; None where a metric is undefined in some case."""
   groups = {}
@@ -72,7 +72,7 @@ def seed_intervals(rows: dict[str, dict]) -> dict[str, dict]:
     groups.setdefault(method_of(label), []).append(result)
   out = {}
   for method, results in groups.items():
-    if len(results) < 2:
+    if len(results) < minimum:
       continue
     cases = [c for c in results[0]['cases'] if all(c in r['cases'] for r in results)]
     entry = {'seeds': len(results), 'cases': len(cases)}

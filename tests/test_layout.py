@@ -94,5 +94,6 @@ def test_wheel_carries_presets_suites_and_entry_points(tmp_path):
   assert not any(n.startswith(('tests/', 'benchmarks/')) for n in names)
   entry_points = next(n for n in names if n.endswith('entry_points.txt'))
   text = zipfile.ZipFile(wheel).read(entry_points).decode()
-  for command in ('mvcoba-train', 'mvcoba-eval', 'mvcoba-export', 'mvcoba-viz', 'mvcoba-demo'):
+  for command in ('mvcoba-train', 'mvcoba-eval', 'mvcoba-export', 'mvcoba-viz', 'mvcoba-demo',
+                  'mvcoba-reproduce'):
     assert f'{command} = mvcoba_jax.cli.' in text, command

@@ -14,6 +14,7 @@ from mvcoba_jax import agent, networks
 from mvcoba_jax import replay as replay_lib
 from mvcoba_jax.checkpoint import Checkpoints
 from mvcoba_jax.cli import eval as eval_cli
+from mvcoba_jax.cli import reproduce as reproduce_cli
 from mvcoba_jax.cli import train as train_cli
 from mvcoba_jax.config import resolve
 from mvcoba_jax.training import Trainer
@@ -232,3 +233,15 @@ def test_sweep_of_methods_and_seeds_trains_evaluates_and_aggregates(tmp_path, ca
   with pytest.raises(SystemExit):  # a sweep and a single run at once
     train_cli.main(['--config', TINY, '--workdir', str(sweep), '--methods', 'mvcoba',
                     '--method', 'vpg'])
+
+
+def test_reproduction_trains_evaluates_and_sets_ours_beside_the_paper(tmp_path, capsys):
+  out = tmp_path / 'tables'
+  assert reproduce_cli.main(['--config', TINY, '--methods', 'grasp_only', '--seeds', '0', '1',
+                             '--actions', '4', '--runs', '1', '--max-actions', '2',
+                             '--suites', 'occluded', '--workdir', str(tmp_path / 'sweep'),
+                             '--out', str(out)]) == 0
+  text = (out / 'comparison.md').read_text()
+  assert '### occluded: mean [95% CI over 2 seeds] and the paper' in text
+  assert '| DRGP (grasp_only) | 2 |' in text and '| MV-COBA (not run) | - |' in text and '97.8' in text
+  assert 'Expected wall time' in text and 'expected about' in capsys.readouterr().out

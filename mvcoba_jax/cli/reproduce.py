@@ -1,0 +1,87 @@
+"""Reproduces the paper's comparison in one command: every method x seeds trained for the paper's
+3000 actions, every suite evaluated with its 5 runs per case, the tables with our intervals over
+seeds beside the paper's figures.
+
+  mvcoba-reproduce [--methods mvcoba mvcoba_2fcn vpg grasp_only] [--seeds 0 1 2]
+                   [--actions 3000] [--runs 5] [--suites random ordered occluded]
+                   [--workdir runs/reproduction] [--out docs/results/reproduction]
+                   [--config default] [--set KEY=VALUE ...]
+
+Training resumes where a killed reproduction stopped. Writes the evaluation's results.json and
+results.md and comparison.md (ours beside the paper's, per suite) to --out, and prints the
+expected and the actual wall time.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import sys
+import time
+
+from mvcoba_jax import config as config_lib
+from mvcoba_jax import methods, paper, report
+from mvcoba_jax.checkpoint import holds_checkpoint
+from mvcoba_jax.cli import eval as eval_cli
+from mvcoba_jax.cli import train as train_cli
+from mvcoba_jax.suites import SUITES, suite_files
+
+# Rough speeds on a 2-core CPU, native backend, default preset (docs/results): what the expected
+# wall time is computed from.
+TRAIN_ACTIONS_PER_S = 8.0
+EVAL_S_PER_CASE_RUN = 3.0
+
+
+def main(argv=None) -> int:
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  config_lib.add_arguments(parser)
+  parser.add_argument('--methods', nargs='+', choices=methods.names(),
+                      default=list(paper.PAPER_NAMES))
+  parser.add_argument('--seeds', nargs='+', type=int, default=[0, 1, 2])
+  parser.add_argument('--actions', type=int, default=3000, help='training actions per run')
+  parser.add_argument('--runs', type=int, default=5, help='evaluation runs per case')
+  parser.add_argument('--max-actions', type=int, default=60, help='action cap per run')
+  parser.add_argument('--suites', nargs='+', default=['random', 'ordered', 'occluded'],
+                      choices=SUITES)
+  parser.add_argument('--workdir', default='runs/reproduction', help='the training sweep')
+  parser.add_argument('--out', default='docs/results/reproduction', help='tables')
+  args = parser.parse_args(argv)
+  if args.actions < 1 or args.runs < 1:
+    parser.error('--actions and --runs must be at least 1')
+  trainings = len(args.methods) * len(args.seeds)
+  cases = sum(len(files) for files in suite_files(args.suites).values())
+  expected = (trainings * args.actions / TRAIN_ACTIONS_PER_S
+              + trainings * cases * args.runs * EVAL_S_PER_CASE_RUN)
+  print(f'{trainings} trainings of {args.actions} actions, then {trainings} policies x {cases} '
+        f'cases x {args.runs} runs: expected about {expected / 60:.0f} min on a 2-core CPU',
+        flush=True)
+  start = time.perf_counter()
+  workdir = pathlib.Path(args.workdir)
+  sweep = ['--workdir', str(workdir), '--methods', *args.methods,
+           '--seeds', *map(str, args.seeds), '--set', f'train.total_actions={args.actions}',
+           *(['--config', args.config] if args.config else []),
+           *(a for o in args.overrides for a in ('--set', o))]
+  resume = workdir.is_dir() and any(holds_checkpoint(p) for p in workdir.iterdir())
+  code = train_cli.main(sweep + (['--resume'] if resume else []))
+  if code:
+    return code
+  dirs = [str(workdir / f'{m}-s{s}') for m in args.methods for s in args.seeds]
+  out = pathlib.Path(args.out)
+  code = eval_cli.main(['--checkpoint', *dirs, '--suite', *args.suites, '--runs', str(args.runs),
+                        '--max-actions', str(args.max_actions), '--out', str(out)])
+  if code:
+    return code
+  results = json.loads((out / 'results.json').read_text())
+  text = '\n\n'.join(f'### {suite}: mean [95% CI over {len(args.seeds)} seeds] and the paper\n\n'
+                     + paper.comparison(suite, report.seed_intervals(rows, minimum=1))
+                     for suite, rows in results.items())
+  wall = time.perf_counter() - start
+  (out / 'comparison.md').write_text(
+      f'{text}\n\nExpected wall time {expected / 60:.0f} min, actual {wall / 60:.0f} min.\n')
+  print(f'\n{text}\n\nwrote {out / "comparison.md"}; wall time {wall / 60:.1f} min '
+        f'(expected about {expected / 60:.0f})')
+  return 0
+
+
+if __name__ == '__main__':
+  sys.exit(main())

@@ -1,0 +1,65 @@
+"""The paper's results (MV-COBA, Sustainability 2021, Tables 1-4: means over each suite's cases)
+and their table beside ours, with our intervals over training seeds."""
+from __future__ import annotations
+
+import math
+
+# Our method -> the paper's name for it (grasp-only stands for its DRGP).
+PAPER_NAMES = {'mvcoba': 'MV-COBA', 'mvcoba_2fcn': 'MV-COBA-2FCNs', 'vpg': 'VPG',
+               'grasp_only': 'DRGP'}
+
+# suite -> paper method -> metric -> value (%); the paper's completion counts objects, so it is
+# held against our objects_picked.
+RESULTS = {
+    'random': {
+        'MV-COBA': {'grasp_success': 83.6, 'action_efficiency': 75.0, 'completion': 94.0},
+        'MV-COBA-2FCNs': {'grasp_success': 70.8, 'action_efficiency': 60.4, 'completion': 80.1},
+        'VPG': {'grasp_success': 65.4, 'action_efficiency': 51.1, 'completion': 70.9},
+        'CPG': {'grasp_success': 64.5, 'action_efficiency': 48.7, 'completion': 67.0},
+        'DRGP': {'grasp_success': 56.6, 'action_efficiency': 56.6, 'completion': 44.6},
+        'MVP': {'grasp_success': 57.8, 'action_efficiency': 57.8, 'completion': 50.5}},
+    'ordered': {
+        'MV-COBA': {'grasp_success': 86.3, 'action_efficiency': 80.4, 'completion': 100.0},
+        'MV-COBA-2FCNs': {'grasp_success': 76.4, 'action_efficiency': 68.7, 'completion': 91.6},
+        'VPG': {'grasp_success': 65.2, 'action_efficiency': 49.5, 'completion': 78.8},
+        'CPG': {'grasp_success': 63.5, 'action_efficiency': 53.0, 'completion': 83.1},
+        'DRGP': {'grasp_success': 42.3, 'action_efficiency': 42.3, 'completion': 20.6},
+        'MVP': {'grasp_success': 35.6, 'action_efficiency': 35.6, 'completion': 27.2}},
+    'occluded': {
+        'MV-COBA': {'grasp_success': 97.8, 'completion': 100.0},
+        'MV-COBA-2FCNs': {'grasp_success': 26.2, 'completion': 0.0},
+        'VPG': {'grasp_success': 28.3, 'completion': 0.0},
+        'CPG': {'grasp_success': 29.7, 'completion': 0.0},
+        'DRGP': {'grasp_success': 26.3, 'completion': 0.0},
+        'MVP': {'grasp_success': 44.3, 'completion': 0.0}},
+}
+COLUMNS = (('grasp_success', 'grasp_success', 'grasp success'),
+           ('action_efficiency', 'action_efficiency', 'action efficiency'),
+           ('objects_picked', 'completion', 'objects picked (paper: completion)'))
+
+
+def comparison(suite: str, ours: dict[str, dict]) -> str:
+  """Markdown: per method, our mean [95% CI over seeds] and the paper's figure, per metric.
+
+  `ours` is `report.seed_intervals` of the suite (method -> metric -> (point, low, high))."""
+  head = ('| method | seeds | ' + ' | '.join(f'{label}: ours | paper' for *_, label in COLUMNS)
+          + ' |\n|---|---|' + '---|---|' * len(COLUMNS))
+  lines = [head]
+  paper = RESULTS.get(suite, {})
+  for method, entry in ours.items():
+    name = PAPER_NAMES.get(method, method)
+    cells = []
+    for key, paper_key, _ in COLUMNS:
+      value = entry.get(key)
+      ci = '-' if value is None else (f'{value[0]:.1f}' if math.isnan(value[1]) else
+                                      f'{value[0]:.1f} [{value[1]:.1f}, {value[2]:.1f}]')
+      theirs = paper.get(name, {}).get(paper_key)
+      cells += [ci, '-' if theirs is None else f'{theirs:.1f}']
+    lines.append(f'| {name} ({method}) | {entry["seeds"]} | ' + ' | '.join(cells) + ' |')
+  for name, figures in paper.items():
+    if name not in {PAPER_NAMES.get(m, m) for m in ours}:
+      cells = []
+      for _, paper_key, _ in COLUMNS:
+        cells += ['-', '-' if paper_key not in figures else f'{figures[paper_key]:.1f}']
+      lines.append(f'| {name} (not run) | - | ' + ' | '.join(cells) + ' |')
+  return '\n'.join(lines)
