@@ -6,7 +6,15 @@ import typing
 
 import pytest
 
-from mvcoba_jax.config import PRESETS, Config, ConfigError, from_dict, resolve, to_dict
+from mvcoba_jax.config import (
+  PRESETS,
+  Config,
+  ConfigError,
+  defaulted,
+  from_dict,
+  resolve,
+  to_dict,
+)
 
 
 @pytest.mark.parametrize('preset', PRESETS)
@@ -103,3 +111,11 @@ def test_fuzzed_overrides_are_accepted_or_refused_naming_the_key():
       assert key.split('.')[-1] in str(e) or 'workspace' in str(e), (key, text, str(e))
       outcomes['refused'] += 1
   assert outcomes['accepted'] > 10 and outcomes['refused'] > 100, outcomes
+
+
+def test_saved_config_without_a_newer_field_gets_what_its_run_used():
+  """Runs saved before train.target existed bootstrapped from the target network."""
+  saved = to_dict(resolve('tiny', ['train.target=acting']))
+  del saved['train']['target']
+  config = from_dict(saved)
+  assert config.train.target == 'network' and defaulted(saved, config) == {}

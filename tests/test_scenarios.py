@@ -183,7 +183,7 @@ def test_vpg_reader(tmp_path):
 
 @pytest.mark.parametrize('line, field, says', [
     ('4.obj 0.3 0.4 0.5 -0.5 0.0 0.026 0.0 0.0', 'euler_c', 'missing'),
-    ('5.obj 0.3 0.4 0.5 -0.5 0.0 0.026 0.0 0.0 0.0', 'mesh', "unknown VPG mesh '5.obj'"),
+    ('5.obj 0.3 0.4 0.5 -0.5 0.0 0.026 0.0 0.0 0.0', 'mesh', "unknown mesh '5.obj'"),
     ('4.obj 0.3 0.4 0.5 -0.5 0.0 zz 0.0 0.0 0.0', 'z', "'zz' is not a number"),
     ('4.obj 0.3 0.4 0.5 -0.5 0.0 0.026 nan 0.0 0.0', 'euler_a', 'not finite'),
     ('4.obj 0.3 0.4 2.5 -0.5 0.0 0.026 0.0 0.0 0.0', 'blue', 'not in 0..1'),

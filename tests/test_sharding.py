@@ -20,7 +20,7 @@ from mvcoba_jax import sharding
 from mvcoba_jax.config import resolve
 from mvcoba_jax.training import Trainer
 assert len(jax.devices()) == 2, jax.devices()
-config = resolve('tiny', ['train.steps_per_iteration=1'])
+config = resolve('tiny', ['train.steps_per_iteration=2'])  # the replay fills from step 2
 trainer, sharded = Trainer(config), Trainer(config, sharding.mesh())
 state = jax.jit(trainer.init)(jax.random.PRNGKey(0))
 args = (jnp.bool_(True), jnp.float32(-1.0))

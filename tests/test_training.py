@@ -47,8 +47,11 @@ def test_training_steps_fill_the_replay_and_update(trainer, trained):
   state, logs = trained
   b, k = trainer.config.num_envs, trainer.config.train.steps_per_iteration
   assert int(state.actions) == 2 * b * k
-  assert int(state.replay.size) == 2 * b * k
-  assert int(state.updates) == 2 * k
+  # The default target ('acting') stores a step's transitions with the next step, once its
+  # acting forward has valued their next states: the last step's still wait, and the first step
+  # had nothing to learn from.
+  assert int(state.replay.size) == 2 * b * k - b and bool(state.pending_valid)
+  assert int(state.updates) == 2 * k - 1
   assert int(state.skipped_updates) == 0
   assert all(np.isfinite(np.asarray(log.loss)).all() for log in logs)
   assert np.asarray(state.env.healthy).all()
@@ -61,12 +64,14 @@ def test_episode_end_bootstraps_from_the_fresh_tabletop(trainer, trained, iterat
   empty = state.replace(env=state.env.replace(in_play=state.env.in_play.at[0].set(False)))
   after, log = iterate(empty, jnp.bool_(True), jnp.float32(-1.0))
   b = trainer.config.num_envs
-  first, second = int(state.replay.cursor), int(state.replay.cursor) + b  # env 0, steps 1 and 2
+  # Env 0's clearing action (step 1) enters the replay at step 2, after the previous step's
+  # transitions; its successor (step 2) is still pending.
+  first = int(state.replay.cursor) + b
   data = after.replay.data
   assert bool(log.done[0, 0]) and not bool(log.done[1, 0])  # env 0 had nothing left: cleared
   assert not bool(data.done[first]) and bool(data.changed[first])  # grasp rule at the new tabletop
   np.testing.assert_array_equal(np.asarray(data.next_obs.depth[first]),
-                                np.asarray(data.obs.depth[second]))
+                                np.asarray(after.pending.obs.depth[0], np.float16))
   assert float(np.max(np.asarray(data.next_obs.depth[first], np.float32))) > 0.02  # objects again
 
 
