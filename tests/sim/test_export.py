@@ -28,7 +28,7 @@ pytest.importorskip('jax2onnx')
 pytestmark = pytest.mark.filterwarnings('ignore::DeprecationWarning:jax2onnx')
 
 TINY = 'tiny'
-ROOT = pathlib.Path(__file__).resolve().parent.parent
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / 'examples' / 'onnx_infer.py'
 # Runs a script as __main__ and fails if anything imported JAX along the way.
 NO_JAX = '''

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts
+from mvcoba_jax.suites import SUITES_DIR
 from tests.helpers import BACKENDS, make_env
 from tests.penetration import max_penetration
-from tests.test_scenarios import VPG_CASES
 
 # A VPG-format case of our own: a cube, a lying tall box, a disk and a parked line.
 OWN_CASE = """\
@@ -22,7 +22,7 @@ def settled(request, tmp_path_factory):
   env = make_env('default', request.param)
   own = tmp_path_factory.mktemp('cases') / 'own-case.txt'
   own.write_text(OWN_CASE)
-  paths = [own] + sorted(VPG_CASES.glob('test-10-obj-*.txt'))
+  paths = [own] + sorted((SUITES_DIR / 'vpg').glob('test-10-obj-*.txt'))
   cases = [read_case(p) for p in paths]
   states = jax.jit(jax.vmap(env.reset_from_case))(
       stack_layouts([case_to_layout(c, env) for c in cases]))
