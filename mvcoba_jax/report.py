@@ -99,6 +99,13 @@ def scored(by_case: dict[str, list[metrics.RunLog]], wall_s: float) -> dict:
                    for name, logs in by_case.items()}}
 
 
+def uneven_starts(by_case: dict[str, list[metrics.RunLog]]) -> str:
+  """`case (n1, n2, ...)` for each case whose runs began with different numbers of objects in
+  play (objects left while it settled, in some runs only); empty when every case is even."""
+  return ', '.join(f'{name} ({", ".join(str(log.objects) for log in logs)})'
+                   for name, logs in by_case.items() if len({log.objects for log in logs}) > 1)
+
+
 def loss_summary(lost: list[dict]) -> str:
   """One line on the objects that left the workspace (see `evaluation.losses`)."""
   grasps = [r for r in lost if r['primitive'] == 'grasp']

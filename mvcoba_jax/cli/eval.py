@@ -150,6 +150,10 @@ def main(argv=None) -> int:
         (folder / 'losses.json').write_text(json.dumps(lost, indent=1))
         print(f'  visuals in {folder}; {report_lib.loss_summary(lost)}', flush=True)
       by_case = {name: logs[i * args.runs:(i + 1) * args.runs] for i, name in enumerate(names)}
+      uneven = report_lib.uneven_starts(by_case)
+      if uneven:
+        print(f'  objects left while these cases settled, so their runs start with different '
+              f'numbers in play: {uneven}', flush=True)
       rows[method] = report_lib.scored(by_case, time.perf_counter() - start)
       report[suite] = rows
       report_lib.write_report(report, out)

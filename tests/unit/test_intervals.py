@@ -47,3 +47,11 @@ def test_report_gives_intervals_for_methods_evaluated_from_several_seeds():
   assert point == pytest.approx(75.5) and low < point < high
   text = report.suite_tables('ordered', rows)[0]
   assert text.startswith('### ordered: over training seeds') and '| mvcoba | 2 | 75.5 [' in text
+
+
+def test_uneven_starts_name_the_cases_whose_runs_began_differently():
+  from mvcoba_jax.metrics import RunLog
+  log = lambda objects: RunLog(actions=5, grasp_attempts=5, grasp_successes=4, objects=objects,
+                               picked=4, lost=0, completed=False)
+  assert report.uneven_starts({'a': [log(6), log(6)], 'b': [log(31), log(32)]}) == 'b (31, 32)'
+  assert report.uneven_starts({'a': [log(6), log(6)]}) == ''
