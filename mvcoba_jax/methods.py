@@ -1,7 +1,7 @@
 """The methods: what each one's networks score and see, and the rule that picks its primitive.
 
 Networks, agent, export and the command lines read this table, so a new method is one `register`
-call (plus its test). Primitives are `envs.primitives.PUSH` (0) and `GRASP` (1); views index the
+call (plus its test). Primitives are `sim.primitives.PUSH` (0) and `GRASP` (1); views index the
 cameras (`Observation`'s V axis).
 """
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """The batched tabletop environment: pure `reset`, `reset_from_case` and `step` over a pytree state.
 
 Every function here works on one environment and is jittable; vmap it over B environments
-(`jax.vmap(env.step)`). The physics runs in the backend `scene.backend` picks (`envs/physics.py`:
+(`jax.vmap(env.step)`). The physics runs in the backend `scene.backend` picks (`sim/physics.py`:
 native MuJoCo on a CPU, MJX on an accelerator); nothing here depends on which. Object slots not
 in play wait at their parking spots, so they never touch anything and never count.
 """
