@@ -50,13 +50,7 @@ def incompatibilities(saved: dict, current: dict) -> list[str]:
 
 def _name(path) -> str:
   """`env.sim.qpos`, `params.fcns.0.trunk.blocks.0.conv1.kernel.value`: a leaf's tree path."""
-  parts = []
-  for key in path:
-    for attr in ('name', 'key', 'idx'):
-      if hasattr(key, attr):
-        parts.append(str(getattr(key, attr)))
-        break
-  return '.'.join(parts)
+  return jax.tree_util.keystr(path, simple=True, separator='.')
 
 
 def _leaves(state) -> dict:

@@ -74,6 +74,13 @@ def jitter(layout: Layout, key) -> Layout:
   return layout.replace(pos=pos, quat=quat)
 
 
+def start(env: Tabletop, layouts: Layout, keys):
+  """The settled start state of each run (N,) from its layout, jittered by its key, and the key
+  that run goes on with."""
+  k_start, k_loop = jax.vmap(jax.random.split, out_axes=1)(keys)
+  return jax.vmap(env.reset_from_case)(jax.vmap(jitter)(layouts, k_start), k_start), k_loop
+
+
 def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Layout, keys,
              max_actions: int, record: bool = False,
              progress: Callable[[jnp.ndarray, jnp.ndarray], None] | None = None) -> Runs:
@@ -84,8 +91,7 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
   on the host after every lockstep action, from inside the compiled loop: one call of a large
   suite can take an hour on a CPU.
   """
-  k_start, k_loop = jax.vmap(jax.random.split, out_axes=1)(keys)
-  states = jax.vmap(env.reset_from_case)(jax.vmap(jitter)(layouts, k_start), k_start)
+  states, k_loop = start(env, layouts, keys)
   obs = task.observe(env, states)
   n = layouts.in_play.shape[0]
   zeros = jnp.zeros(n, jnp.int32)
@@ -222,8 +228,7 @@ def settled_starts(cases, config, runs: int, seed: int = 0):
   env = Tabletop(suite_config(config, pool_for(cases)))
   layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
   keys = jax.random.split(jax.random.PRNGKey(seed), len(cases) * runs)
-  start = jax.jit(jax.vmap(lambda layout, key: env.reset_from_case(jitter(layout, key), key)))
-  return env, start(layouts, keys)
+  return env, jax.jit(lambda l, k: start(env, l, k)[0])(layouts, keys)
 
 
 def case_problems(cases, config) -> list[str]:

@@ -381,13 +381,11 @@ def overlaps(case: Case, env, tolerance: float = OVERLAP_TOLERANCE) -> list[str]
   """One message per pair of `case`'s objects that interpenetrate by more than `tolerance` as
   placed, before any settling, naming both lines (native MuJoCo's collision detection)."""
   m, index = env.scene.mj_model, env.scene.index
+  layout = case_to_layout(case, env)
   data = mujoco.MjData(m)
-  line_of = {}
-  for slot in range(len(index.slot_shapes)):
-    data.qpos[index.slot_qpos[slot]:index.slot_qpos[slot] + 7] = park_position(slot) + (1, 0, 0, 0)
-  for slot, obj in zip(case_slots(case, env), case.objects):
-    data.qpos[index.slot_qpos[slot]:index.slot_qpos[slot] + 7] = obj.pos + obj.quat
-    line_of[slot] = obj.line
+  for slot, (pos, quat) in enumerate(zip(np.asarray(layout.pos), np.asarray(layout.quat))):
+    data.qpos[index.slot_qpos[slot]:index.slot_qpos[slot] + 7] = np.concatenate([pos, quat])
+  line_of = {slot: obj.line for slot, obj in zip(case_slots(case, env), case.objects)}
   mujoco.mj_forward(m, data)
   deepest = {}
   n = data.ncon
