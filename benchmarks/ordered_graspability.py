@@ -4,7 +4,9 @@ For each ordered case (in a scene holding just that case's objects), the case is
 every object is grasped at its centre and top surface at each of 8 rotations (the half turn:
 the fingers are symmetric), all in one batch of `jax.vmap(env.step)`. An object counts as
 liftable when some rotation picks it (it leaves the table held by the fingers). In a case that
-forces a push, the packed objects are not liftable; the case's isolated object is the control.
+forces a push, the packed objects are not liftable. The control: every case of the isolated
+suite (each shape alone, twice) grasped the same way at all 16 rotations; each shape should stay
+liftable at nearly all of them.
 
   python benchmarks/ordered_graspability.py [--set scene.contact_timeconst=0.02] [--cases 00 02]
 """
@@ -13,7 +15,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import pathlib
 import platform
 import time
 
@@ -30,12 +31,13 @@ from mvcoba_jax.sim import shapes  # noqa: E402
 from mvcoba_jax.sim.primitives import GRASP, Action  # noqa: E402
 from mvcoba_jax.sim.scenarios import case_slots, case_to_layout, read_case  # noqa: E402
 from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
+from mvcoba_jax.suites import suite_files  # noqa: E402
 
-SUITE = pathlib.Path(__file__).resolve().parent.parent / 'suites' / 'ordered'
 PACKED = 0.06  # an object with a neighbour centre this close is packed; others are isolated
 
 
-def run_case(path: pathlib.Path, base, rotations: int) -> dict:
+def lift_table(path, base, rotations: int):
+  """(case, (objects, rotations) bool: grasp at rotation k lifted the object) for one case file."""
   case = read_case(path)
   env = Tabletop(evaluation.suite_config(base, evaluation.pool_for([case])))
   n = len(case.objects)
@@ -53,7 +55,13 @@ def run_case(path: pathlib.Path, base, rotations: int) -> dict:
   gone = ~np.asarray(after.in_play)[np.arange(n * rotations), slots]
   # The target itself was picked (not a neighbour, not knocked off the table).
   lifted = (gone & (np.asarray(info.picked) > 0) & (np.asarray(info.lost) == 0)).reshape(n, -1)
-  gap = np.linalg.norm(xy[:, None] - xy[None], axis=-1) + np.eye(n) * 1e9
+  return case, lifted
+
+
+def ordered_case(path, base) -> dict:
+  case, lifted = lift_table(path, base, base.env.num_rotations // 2)
+  xy = np.array([o.pos[:2] for o in case.objects])
+  gap = np.linalg.norm(xy[:, None] - xy[None], axis=-1) + np.eye(len(xy)) * 1e9
   packed = gap.min(axis=1) < PACKED
   objects = [dict(shape=o.shape, line=o.line, packed=bool(p), lifted_at=np.flatnonzero(r).tolist())
              for o, p, r in zip(case.objects, packed, lifted)]
@@ -63,34 +71,42 @@ def run_case(path: pathlib.Path, base, rotations: int) -> dict:
               isolated_liftable=f'{int((liftable & ~packed).sum())}/{int((~packed).sum())}')
 
 
+def isolated_case(path, base) -> dict:
+  case, lifted = lift_table(path, base, base.env.num_rotations)
+  return dict(case=case.name, shape=case.objects[0].shape, rotations_lifted=int(lifted.sum()))
+
+
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   config_lib.add_arguments(parser)
   parser.add_argument('--cases', nargs='*', default=None,
-                      help='case numbers to run, e.g. 00 02 (default: all six)')
+                      help='ordered case numbers to run, e.g. 00 02 (default: all six)')
   args = parser.parse_args()
   runtime.setup()
   base = config_lib.from_arguments(args)
-  rotations = base.env.num_rotations // 2
-  paths = sorted(SUITE.glob('ordered-*.scn'))
+  files = suite_files(['ordered', 'isolated'])
+  paths = files['ordered']
   if args.cases:
     paths = [p for p in paths if p.stem.split('-')[1] in args.cases]
     if len(paths) != len(set(args.cases)):
       parser.error(f'--cases {" ".join(args.cases)}: the ordered suite has cases 00 to 05')
   t0 = time.perf_counter()
-  results = [run_case(p, base, rotations) for p in paths]
+  results = [ordered_case(p, base) for p in paths]
+  control = [isolated_case(p, base) for p in files['isolated']]
   packed = sum(r['packed'] for r in results)
   liftable = sum(r['packed_liftable'] for r in results)
   print(json.dumps(dict(
       benchmark='ordered_graspability',
       settings=dict(contact_timeconst=base.scene.contact_timeconst, timestep=base.scene.timestep,
-                    rotations=f'{rotations} of {base.env.num_rotations} (half turn)',
+                    rotations=f'{base.env.num_rotations // 2} of {base.env.num_rotations} '
+                              '(half turn); isolated shapes: all',
                     grasp_depth=base.env.grasp_depth, backend=jax.default_backend(),
                     machine=platform.machine(), cpu_count=os.cpu_count(), jax=jax.__version__,
                     overrides=args.overrides),
-      cases=results,
+      cases=results, isolated=control,
       packed_objects=packed, packed_liftable_without_push=liftable,
       fraction_liftable=round(liftable / max(packed, 1), 3),
+      isolated_fewest_rotations=min(r['rotations_lifted'] for r in control),
       seconds_with_compile=round(time.perf_counter() - t0, 1)), indent=1))
 
 

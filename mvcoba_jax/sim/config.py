@@ -137,6 +137,10 @@ class SceneConfig:
   contact_timeconst: float = 0.008
   friction: float = 1.0
   finger_friction: float = 1.5
+  # The most the gripper's vertical drive presses down (N), as a real arm's force limit would:
+  # fingers that land on a neighbouring block stop on its top instead of sinking millimetres
+  # into it and prying packed blocks apart (benchmarks/ordered_graspability.py).
+  press_force: float = 5.0
   object_density: float = 500.0
   # MJX only (native MuJoCo has no caps): pairs and contact points kept per step.
   max_geom_pairs: int = 24
@@ -157,6 +161,7 @@ class SceneConfig:
         'iterations': Between(1, 1000), 'ls_iterations': Between(1, 1000),
         'contact_timeconst': Between(0, 1, low_open=True),
         'friction': Between(0, 10, low_open=True), 'finger_friction': Between(0, 10, low_open=True),
+        'press_force': Between(0, 60, low_open=True),
         'object_density': Between(1, 100000), 'max_geom_pairs': Between(1, 100000),
         'max_contact_points': Between(1, 1000000), 'occluders': Between(0, 1, low_open=True)})
     names = [name for name, _ in self.pool]

@@ -131,7 +131,8 @@ def build_mjcf(scene: SceneConfig) -> str:
   <actuator>
     <position name="grip_x" joint="grip_x" kp="3000" kv="150" forcerange="-60 60"/>
     <position name="grip_y" joint="grip_y" kp="3000" kv="150" forcerange="-60 60"/>
-    <position name="grip_z" joint="grip_z" kp="3000" kv="150" forcerange="-60 60"/>
+    <position name="grip_z" joint="grip_z" kp="3000" kv="150"
+              forcerange="{-scene.press_force:.6g} 60"/>
     <position name="grip_yaw" joint="grip_yaw" kp="30" kv="2" forcerange="-5 5"/>
     <position name="finger_left" joint="finger_left" kp="400" kv="10" forcerange="-15 15"/>
     <position name="finger_right" joint="finger_right" kp="400" kv="10" forcerange="-15 15"/>

@@ -3,7 +3,8 @@
   python -m mvcoba_jax.suites.generate
 
 - random/: 6 cases of 20-40 objects heaped over the workspace, each set down onto the heap;
-- ordered/: 6 well-ordered cases of 4-17 blocks packed with no room for the fingers between them;
+- ordered/: 6 well-ordered cases of 4-17 blocks packed with no room for the fingers between them
+  (pinwheels, a framed square, grids);
 - occluded/: 3 cases: camera 1 fully blocked; both cameras partly blocked so that some objects
   are seen by one camera only;
 - isolated/: 16 cases of one object alone (each shape twice, random place and yaw): a policy's
@@ -73,21 +74,45 @@ def grid(shape, rows, cols, x0, y0, pitch_x, pitch_y, start_colour=0):
                y0 + r * pitch_y, 0) for r in range(rows) for c in range(cols)]
 
 
-def ordered_cases() -> list[str]:
-  """Blocks side by side, touching (1 mm gaps), as in the paper's Figure 7.
+CELL = 0.051  # 5 cm blocks on a grid of 5.1 cm cells: 1 mm gaps
 
-  Every block is at least two deep both ways: a single row leaves the fingers room to close
-  across it (benchmarks/ordered_graspability.py measures which objects a grasp can still lift).
-  """
-  g = 0.051  # 5 cm blocks, 1 mm apart
+
+def pinwheel(long, centre, x0, y0, start_colour=0):
+  """Four 10 x 5 cm blocks (`long`) turned about a 5 x 5 cm one (`centre`): a 15 cm square in
+  which every block has a neighbour across each axis and no diagonal fits the 11 cm opening."""
+  u = CELL
+  parts = [(long, -0.5 * u, u, 0), (long, u, 0.5 * u, 90), (long, 0.5 * u, -u, 0),
+           (long, -u, -0.5 * u, 90), (centre, 0, 0, 0)]
+  return [line(shape, COLOR_NAMES[(start_colour + i) % 10], x0 + dx, y0 + dy, yaw)
+          for i, (shape, dx, dy, yaw) in enumerate(parts)]
+
+
+def ring(x0, y0, start_colour=0):
+  """A 2 x 2 square of cubes framed by four arch + cube strips turned like a pinwheel."""
+  u = CELL
+  cell = lambda i, j: (x0 + (i - 1.5) * u, y0 + (j - 1.5) * u)
+  parts = [('arch', *cell(0.5, 3), 0), ('cube', *cell(2, 3), 0),
+           ('arch', *cell(3, 2.5), 90), ('cube', *cell(3, 1), 0),
+           ('arch', *cell(2.5, 0), 0), ('cube', *cell(1, 0), 0),
+           ('arch', *cell(0, 0.5), 90), ('cube', *cell(0, 2), 0)]
+  parts += [('cube', *cell(i, j), 0) for j in (1, 2) for i in (1, 2)]
+  return [line(shape, COLOR_NAMES[(start_colour + i) % 10], x, y, yaw)
+          for i, (shape, x, y, yaw) in enumerate(parts)]
+
+
+def ordered_cases() -> list[str]:
+  """Blocks side by side, 1 mm apart, so that the fingers have no room, as in the paper's
+  Figure 7: pinwheels, a framed square and plain grids of cubes. Only a grid's corner cubes can
+  be taken without a push (across their diagonal); benchmarks/ordered_graspability.py measures
+  which objects a grasp can still lift."""
+  g = CELL
   cases = [
-      grid('cube', 2, 2, -0.05, -0.05, g, g) + [line('cylinder', 'red', 0.15, 0.15, 0)],
-      grid('cube', 2, 3, -0.08, -0.03, g, g) + [line('disk', 'pink', 0.15, 0.15, 0)],
+      pinwheel('flat_box', 'disk', -0.04, -0.04) + [line('cylinder', 'red', 0.15, 0.15, 0)],
+      pinwheel('arch', 'cube', 0.03, -0.03) + [line('disk', 'pink', -0.15, 0.15, 0)],
       grid('cube', 3, 3, -0.1, -0.1, g, g) + [line('prism', 'red', 0.16, 0.16, 0)],
-      grid('flat_box', 4, 2, -0.15, -0.1, 0.101, g) + grid('cube', 2, 2, -0.175, 0.104, g, g, 8)
-      + [line('octagon', 'pink', 0.16, -0.16, 0)],
-      grid('tall_box', 2, 4, -0.1, -0.05, g, g) + grid('cube', 1, 4, -0.1, 0.052, g, g, 8)
-      + [line('arch', 'red', 0.15, -0.16, 0)],
+      ring(-0.03, -0.03) + [line('octagon', 'pink', 0.16, 0.16, 0)],
+      pinwheel('flat_box', 'disk', -0.0775, 0.0) + pinwheel('arch', 'cube', 0.0775, 0.0, 5)
+      + [line('arch', 'red', 0.0, -0.17, 0)],
       grid('cube', 4, 4, -0.13, -0.13, g, g) + [line('cylinder', 'red', 0.17, 0.17, 0)],
   ]
   return [HEADER + ''.join(c) for c in cases]

@@ -1,11 +1,17 @@
-"""Test cases settle where they are listed: the public VPG cases and one written here."""
+"""Test cases behave as written: the public VPG cases and one written here settle where they are
+listed; a packed ordered case leaves the fingers no room."""
 import jax
 import numpy as np
 import pytest
 
-from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts
+from mvcoba_jax import evaluation
+from mvcoba_jax.config import resolve
+from mvcoba_jax.sim import shapes
+from mvcoba_jax.sim.primitives import GRASP
+from mvcoba_jax.sim.scenarios import case_slots, case_to_layout, read_case, stack_layouts
+from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites import SUITES_DIR
-from tests.helpers import BACKENDS, make_env
+from tests.helpers import BACKENDS, actions, make_env
 from tests.penetration import max_penetration
 
 # A VPG-format case of our own: a cube, a lying tall box, a disk and a parked line.
@@ -48,3 +54,24 @@ def test_case_settles_in_place_without_interpenetration(settled, case_index):
   assert drift.max() < 0.01, f'{case.name}: drift per object {np.round(drift, 4)}'
   assert max_penetration(env, states.sim.qpos[case_index]) < 0.002
   assert bool(states.healthy[case_index])
+
+
+def test_pinwheel_forces_a_push():
+  """ordered-00: four flat boxes turned about a disk. A grasp at any block's centre, at any of
+  the half turn's 8 rotations, lifts nothing: the fingers land on a neighbour and stop there
+  (scene.press_force). The case's isolated cylinder, the control, is lifted."""
+  case = read_case(SUITES_DIR / 'ordered' / 'ordered-00.scn')
+  env = Tabletop(evaluation.suite_config(resolve('default'), evaluation.pool_for([case])))
+  rotations = env.config.env.num_rotations // 2
+  start = jax.jit(env.reset_from_case)(case_to_layout(case, env))
+  n = len(case.objects)
+  batch = jax.tree.map(lambda a: np.broadcast_to(a, (n * rotations, *a.shape)), start)
+  rows = [(GRASP, k, *o.pos[:2], float(shapes.SHAPES[o.shape].rest_extent[2]))
+          for o in case.objects for k in range(rotations)]
+  end, info = jax.jit(jax.vmap(env.step))(batch, actions(rows))
+  slots = np.repeat(case_slots(case, env), rotations)
+  lifted = (~np.asarray(end.in_play)[np.arange(n * rotations), slots]
+            & (np.asarray(info.picked) > 0)).reshape(n, rotations)
+  assert [o.shape for o in case.objects][-1] == 'cylinder'
+  assert not lifted[:-1].any(), f'lifted at rotations: {[np.flatnonzero(r) for r in lifted]}'
+  assert lifted[-1].sum() >= rotations - 1

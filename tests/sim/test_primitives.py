@@ -16,6 +16,7 @@ CUBE, CUBE2, FLAT, FLAT2 = 0, 1, 2, 3
 YAWS = list(range(16))
 PUSH_ROTATIONS = list(range(0, 16, 2))
 CUBE_AT = (0.03, -0.02)
+SEAM = 0.02525  # cube centres half a cube and 0.25 mm off the seam
 
 
 @pytest.fixture(scope='module', params=BACKENDS)
@@ -52,6 +53,16 @@ def outcome(env, compiled):
   layouts.append(layout(env, [(CUBE, 0.19, 0.0, 0.0)]))  # 3.4 cm inside the border, pushed out
   rows.append((PUSH, 0, 0.14, 0.0, 0.05))
   names.append('edge')
+  # Two touching cubes (0.5 mm apart along x); a grasp whose near finger lands on their seam.
+  for k, y in ((0, 0.06), (8, -0.06), (0, 0.05)):
+    layouts.append(layout(env, [(CUBE, -SEAM, 0.0, 0.0), (CUBE2, SEAM, 0.0, 0.0)]))
+    rows.append((GRASP, k, 0.0, y, 0.05))
+    names.append(f'seam{k}@{y}')
+  # A row along x, 1 mm gaps: flat box, cube, cube; the middle cube pushed along +y.
+  layouts.append(layout(env, [(FLAT, -0.0765, 0.0, 0.0), (CUBE, 0.0, 0.0, 0.0),
+                              (CUBE2, 0.051, 0.0, 0.0)]))
+  rows.append((PUSH, 4, 0.0, -0.05, 0.05))
+  names.append('row')
   start = reset(stack(layouts))
   end, info = step(start, actions(rows))
   return dict(start=start, end=end, info=info, index={n: i for i, n in enumerate(names)})
@@ -95,6 +106,28 @@ def test_push_moves_cube_about_10cm_along_direction(env, outcome):
     assert abs(across) < 0.03, f'rotation {k}: drifted {across:.3f} m sideways'
     assert bool(end.in_play[i, CUBE]) and not bool(outcome['info'].grasp_success[i])
     assert int(outcome['info'].lost[i]) == 0
+
+
+def test_fingers_on_the_seam_of_touching_cubes_lift_neither(env, outcome):
+  """The force-limited descent stops the fingers on the cubes' tops: they neither wedge into the
+  seam nor pry the cubes apart (scene.press_force); closing, they may drag both along it."""
+  end, info = outcome['end'], outcome['info']
+  for name, i in outcome['index'].items():
+    if not name.startswith('seam'):
+      continue
+    assert int(info.picked[i]) == 0 and not bool(info.grasp_success[i]), name
+    assert bool(end.in_play[i, CUBE]) and bool(end.in_play[i, CUBE2]), name
+    cubes = np.asarray(env.object_positions(jax.tree.map(lambda x: x[i], end)))[[CUBE, CUBE2]]
+    assert abs(cubes[1, 0] - cubes[0, 0] - 2 * SEAM) < 0.005, f'{name}: cubes at {cubes}'
+
+
+def test_push_separates_a_block_from_a_row(env, outcome):
+  start, end, i = outcome['start'], outcome['end'], outcome['index']['row']
+  moved = np.asarray(jax.vmap(env.object_positions)(end)[i]
+                     - jax.vmap(env.object_positions)(start)[i])
+  assert moved[CUBE, 1] > 0.06, f'pushed cube moved {moved[CUBE, 1]:.3f} m'
+  for other in (FLAT, CUBE2):
+    assert np.linalg.norm(moved[other, :2]) < 0.02, f'slot {other} dragged {moved[other, :2]}'
 
 
 def test_push_over_the_border_loses_the_cube(outcome):
