@@ -22,7 +22,8 @@ import onnxruntime as ort
 
 
 def choose(q: np.ndarray, changed: bool, model: dict) -> dict:
-  """The greedy action of `model['action_rule']` from Q maps (2, K, R, R)."""
+  """The greedy action of `model['action_rule']` from its maps (2, K, R, R): the graph's
+  output named by action_rule['maps'] (Q maps, or a suppressing method's scores)."""
   prims = model['primitives']
   flat = q.reshape(q.shape[0], -1)
   rule = model['action_rule']['name']
@@ -35,7 +36,7 @@ def choose(q: np.ndarray, changed: bool, model: dict) -> dict:
   index = int(np.argmax(flat[primitive]))
   rotation, row, col = (int(i) for i in np.unravel_index(index, q.shape[1:]))
   return {'primitive': primitive, 'rotation': rotation, 'row': row, 'col': col,
-          'q': float(flat[primitive, index])}
+          'value': float(flat[primitive, index])}
 
 
 def to_world(action: dict, depth: np.ndarray, model: dict) -> dict:
@@ -78,7 +79,7 @@ def main(argv=None) -> int:
   options.log_severity_level = 3  # the converter's loose shape annotations only warn
   session = ort.InferenceSession(str(args.model / model['onnx']['file']), options,
                                  providers=['CPUExecutionProvider'])
-  (q,) = session.run(['q'], {'color': color[None], 'depth': depth[None]})
+  (q,) = session.run([model['action_rule']['maps']], {'color': color[None], 'depth': depth[None]})
   action = to_world(choose(q[0], bool(args.changed), model), depth, model)
   print(json.dumps(action))
   return 0

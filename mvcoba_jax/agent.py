@@ -8,7 +8,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from mvcoba_jax import methods
+from mvcoba_jax import methods, suppression
 from mvcoba_jax.config import Config, TrainConfig
 from mvcoba_jax.sim.geometry import pixel_to_world
 from mvcoba_jax.sim.primitives import GRASP, PUSH, Action
@@ -38,8 +38,17 @@ def rule_primitive(method: str, changed, best_per_primitive):
   return jnp.full(changed.shape, GRASP, jnp.int32)
 
 
+def rule_maps(q, depth, views: tuple[int, ...], method: str, config: Config):
+  """The maps (B, 2, K, R, R) the method's rule compares and takes the argmax of: its Q maps
+  `q` of every rotation, or for a suppressing method (CPG) `suppression.scores` of them."""
+  if not methods.get(method).suppress:
+    return q
+  return suppression.scores(q, surface_height(depth, views), config.perception.heightmap_resolution)
+
+
 def greedy_actions(q, changed, method: str) -> PixelAction:
-  """The rule's primitive at the argmax rotation and pixel of its Q maps (B, 2, K, R, R)."""
+  """The rule's primitive at the argmax rotation and pixel of its maps (B, 2, K, R, R): Q maps,
+  or `rule_maps` of them."""
   b, _, k, r, _ = q.shape
   flat = q.reshape(b, 2, k * r * r)
   primitive = rule_primitive(method, changed, flat.max(axis=-1))

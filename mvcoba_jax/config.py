@@ -157,7 +157,8 @@ def validate(config: Config) -> Config:
   views = methods.get(net.method).views
   if max(views) >= len(scene.cameras):
     raise ConfigError(f'network.method={net.method!r} reads camera views {views}; '
-                      f'scene.cameras holds {len(scene.cameras)}')
+                      f'scene.cameras holds {len(scene.cameras)} (choosing the method with '
+                      '--method or --set network.method sets the cameras it needs)')
   num_views = len(scene.cameras)
   # Per cell and view, s and s' each: uint8 colour (3 B), float16 depth (2 B), a seen flag (1 B).
   replay = train.replay_capacity * 2 * num_views * side ** 2 * 6
@@ -249,7 +250,8 @@ def _parse(text: str, tp, key: str):
 
 
 def override(config, assignment: str):
-  """Config with one `dotted.key=value` assignment applied."""
+  """Config with one `dotted.key=value` assignment applied; setting network.method to a method
+  that names its cameras (`methods.Method.cameras`) sets scene.cameras to them too."""
   if '=' not in assignment:
     raise ConfigError(f'override {assignment!r} is not of the form key=value')
   key, text = assignment.split('=', 1)
@@ -270,7 +272,12 @@ def override(config, assignment: str):
       raise ConfigError(f'config key {key!r} is a group; set one of its fields')
     return dataclasses.replace(node, **{names[0]: _parse(text.strip(), hints[names[0]], key)})
 
-  return apply(config, path)
+  config = apply(config, path)
+  if path == ['network', 'method'] and config.network.method in methods.names():
+    cameras = methods.get(config.network.method).cameras
+    if cameras:  # a method that moves its camera brings its poses
+      config = dataclasses.replace(config, scene=dataclasses.replace(config.scene, cameras=cameras))
+  return config
 
 
 def resolve(preset: str | pathlib.Path | None, overrides: typing.Sequence[str] = ()) -> Config:

@@ -178,10 +178,13 @@ def losses(trace: Trace, names: list[str], config: Config) -> list[dict]:
   return records
 
 
-def greedy_policy(q_maps: Callable, method: str) -> Policy:
+def greedy_policy(q_maps: Callable, method: str, config) -> Policy:
   """A trained network's greedy policy: `q_maps(obs)` -> (N, 2, K, R, R)."""
+  views = networks.views_used(method)
+
   def policy(obs, changed, keys):
-    return agent.greedy_actions(q_maps(obs), changed, method)
+    maps = agent.rule_maps(q_maps(obs), obs.depth, views, method, config)
+    return agent.greedy_actions(maps, changed, method)
   return policy
 
 
@@ -251,4 +254,4 @@ def make_policy(method_source, config):
   graphdef, params = nnx.split(model)
   method = config.network.method
   q_maps = lambda obs: nnx.merge(graphdef, params)(obs.color, obs.depth)
-  return method, greedy_policy(q_maps, method), networks.views_used(method)
+  return method, greedy_policy(q_maps, method, config), networks.views_used(method)

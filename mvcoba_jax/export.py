@@ -21,8 +21,8 @@ import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
+from mvcoba_jax import agent, methods, networks, perception
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import methods, networks, perception
 from mvcoba_jax.config import Config
 from mvcoba_jax.policy import FORMAT, PolicyError, flat_params, load
 from mvcoba_jax.sim.geometry import rotation_angle
@@ -45,23 +45,34 @@ def onnx_model(config: Config, model: networks.QNetwork):
 
   graphdef, params = nnx.split(model)
   side, views = perception.grid_size(config), len(config.scene.cameras)
+  method = config.network.method
+  outputs = output_names(method)
 
   def forward(color, depth):
-    return nnx.merge(graphdef, params)(color, depth)
+    q = nnx.merge(graphdef, params)(color, depth)
+    if len(outputs) == 1:
+      return q
+    return q, agent.rule_maps(q, depth, networks.views_used(method), method, config)
 
   return to_onnx(forward, [jax.ShapeDtypeStruct((1, views, side, side, 3), jnp.float32),
                            jax.ShapeDtypeStruct((1, views, side, side), jnp.float32)],
-                 model_name=f'mvcoba_{config.network.method}_q', opset=ONNX_OPSET,
-                 input_names=['color', 'depth'], output_names=['q'])
+                 model_name=f'mvcoba_{method}_q', opset=ONNX_OPSET,
+                 input_names=['color', 'depth'], output_names=list(outputs))
+
+
+def output_names(method: str) -> tuple[str, ...]:
+  """The graph's outputs: Q maps, and for a suppressing method the scores its rule compares."""
+  return ('q', 'score') if methods.get(method).suppress else ('q',)
 
 
 def action_rule(method: str) -> dict:
   """The primitive choice of `agent.rule_primitive`, in words and as a name the example reads."""
   name = methods.get(method).rule
   text = methods.RULES[name]
-  return {'name': name, 'primitive': text,
-          'pixel': ('argmax of that primitive\'s Q over (rotation, row, col), flattened in that '
-                    'order; the first maximum wins'),
+  maps = output_names(method)[-1]
+  return {'name': name, 'maps': maps, 'primitive': text,
+          'pixel': (f'argmax of that primitive\'s {maps} over (rotation, row, col), flattened in '
+                    'that order; the first maximum wins'),
           'greedy': 'exploration (epsilon-greedy) is a training matter and is not exported'}
 
 
@@ -70,6 +81,7 @@ def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir) 
   side, k = perception.grid_size(config), config.env.num_rotations
   views, num_views = networks.views_used(config.network.method), len(config.scene.cameras)
   res, half = config.perception.heightmap_resolution, config.scene.workspace_half
+  fuse, suppress = (getattr(methods.get(config.network.method), f) for f in ('fuse', 'suppress'))
   return {
       'format': FORMAT,
       'source': {'workdir': str(pathlib.Path(workdir).resolve()), 'checkpoint_step': step},
@@ -111,10 +123,16 @@ def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir) 
               {'name': 'q', 'shape': [1, 2, k, side, side], 'dtype': 'float32',
                'meaning': 'Q[0, primitive, rotation, row, col] in the heightmap frame (already '
                           'turned back); a primitive the method lacks reads no_action; corners '
-                          'that the rotation turns out of the square read 0'}],
-          'in_graph': ['views_used selection', 'rotation of the inputs by -angle(k) for each '
-                       'k (bilinear, zero fill)', 'input normalisation', 'the FCNs',
-                       'rotation of the Q maps back by +angle(k)'],
+                          'that the rotation turns out of the square read 0'}] + ([
+              {'name': 'score', 'shape': [1, 2, k, side, side], 'dtype': 'float32',
+               'meaning': 'what the action rule compares: (Q + 0.1) x the suppression factor '
+                          'of each action (CPG), no_action where suppressed; Q where nothing '
+                          'is allowed'}] if suppress else []),
+          'in_graph': ['views_used selection'] + (
+              ['fusion of the views into one, the highest point per cell'] if fuse else []) + [
+                  'rotation of the inputs by -angle(k) for each k (bilinear, zero fill)',
+                  'input normalisation', 'the FCNs', 'rotation of the Q maps back by +angle(k)'
+              ] + (['suppression of actions that cannot act (score)'] if suppress else []),
           'outside_graph': ['the action rule and the argmax (action_rule)',
                             'pixel -> world (pixel_to_world)']},
   }

@@ -187,18 +187,34 @@ def _normalise(x):
   return (x - mean) / scale
 
 
+def fuse_views(color, depth):
+  """One view from several: (B, U, R, R, 3), (B, U, R, R) -> (B, 1, R, R, 3), (B, 1, R, R).
+
+  The highest point per cell, with the colour of the views that see it there (averaged when
+  several do); a view that saw nothing in a cell (colour and depth 0) lends it no colour.
+  """
+  top = jnp.max(depth, axis=1, keepdims=True)
+  lends = ((depth >= top) & (jnp.sum(color, axis=-1) > 0)).astype(color.dtype)[..., None]
+  fused = jnp.sum(color * lends, axis=1, keepdims=True) / jnp.maximum(
+      jnp.sum(lends, axis=1, keepdims=True), 1.0)
+  return fused, top
+
+
 class QNetwork(nnx.Module):
   """The method's FCNs behind one call: Q maps (B, 2, K, R, R) for K rotations per state.
 
-  A primitive the method has no network for scores NO_ACTION everywhere.
+  A primitive the method has no network for scores NO_ACTION everywhere. A fusing method's
+  networks see one view, `fuse_views` of its views.
   """
 
   def __init__(self, method: str, config: NetworkConfig, num_rotations: int, rngs: nnx.Rngs):
     self.num_rotations = num_rotations
-    fcns = methods.get(method).fcns
+    spec = methods.get(method)
     self.views = views_used(method)
-    self.primitives = tuple(prims for prims, _ in fcns)
-    self.fcns = nnx.List([FCN(views, len(prims), config, rngs) for prims, views in fcns])
+    self.fuse = spec.fuse
+    self.primitives = tuple(prims for prims, _ in spec.fcns)
+    self.fcns = nnx.List([FCN((0,) if self.fuse else views, len(prims), config, rngs)
+                          for prims, views in spec.fcns])
 
   def __call__(self, color, depth, rotations=None):
     """`color` (B, V, R, R, 3) 0..1, `depth` (B, V, R, R) m; `rotations` (B, K) int rotation
@@ -208,12 +224,16 @@ class QNetwork(nnx.Module):
       rotations = jnp.broadcast_to(jnp.arange(self.num_rotations), (b, self.num_rotations))
     k = rotations.shape[1]
     views = list(self.views)
-    x = jnp.concatenate([color[:, views], depth[:, views, ..., None]], axis=-1)  # (B, U, R, R, 4)
+    color, depth = color[:, views], depth[:, views]
+    if self.fuse:
+      color, depth = fuse_views(color, depth)
+    streams = (0,) if self.fuse else self.views
+    x = jnp.concatenate([color, depth[..., None]], axis=-1)  # (B, U, R, R, 4)
     x = jnp.moveaxis(x, 1, -2).reshape(b, 1, side, side, -1)
     x = jnp.broadcast_to(x, (b, k) + x.shape[2:]).reshape((b * k,) + x.shape[2:])
     angle = rotation_angle(rotations.reshape(-1), self.num_rotations)
-    x = _normalise(rotate_images(x, -angle).reshape(b * k, side, side, len(self.views), 4))
-    inputs = {v: x[..., i, :] for i, v in enumerate(self.views)}
+    x = _normalise(rotate_images(x, -angle).reshape(b * k, side, side, len(streams), 4))
+    inputs = {v: x[..., i, :] for i, v in enumerate(streams)}
     maps = {}
     for prims, fcn in zip(self.primitives, self.fcns):
       out = rotate_images(fcn(inputs), angle)

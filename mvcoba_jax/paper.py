@@ -6,7 +6,7 @@ import math
 
 # Our method -> the paper's name for it (grasp-only stands for its DRGP).
 PAPER_NAMES = {'mvcoba': 'MV-COBA', 'mvcoba_2fcn': 'MV-COBA-2FCNs', 'vpg': 'VPG',
-               'grasp_only': 'DRGP'}
+               'grasp_only': 'DRGP', 'mvp': 'MVP', 'cpg': 'CPG'}
 
 # suite -> paper method -> metric -> value (%); the paper's completion counts objects, so it is
 # held against our objects_picked.

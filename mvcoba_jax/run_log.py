@@ -14,8 +14,9 @@ from mvcoba_jax import curves
 PRIMITIVE_NAMES = ('push', 'grasp')
 
 
-def action_records(log, first_action: int) -> list[dict]:
-  """One JSON record per action of a (K, B) StepLog, numbered over all environments."""
+def action_records(log, first_action: int, viewpoints: int) -> list[dict]:
+  """One JSON record per action of a (K, B) StepLog, numbered over all environments;
+  `viewpoints`: camera views the method looked through for each action."""
   # With several processes each holds its own environments' part; gather the whole batch.
   log = multihost_utils.process_allgather(log, tiled=True) if jax.process_count() > 1 \
       else jax.tree.map(np.asarray, log)
@@ -25,7 +26,8 @@ def action_records(log, first_action: int) -> list[dict]:
            'grasp_success': bool(log.grasp_success[i, e]), 'changed': bool(log.changed[i, e]),
            'reward': float(log.reward[i, e]), 'done': bool(log.done[i, e]),
            'healthy': bool(log.healthy[i, e]), 'picked': int(log.picked[i, e]),
-           'lost': int(log.lost[i, e]), 'explored': bool(log.explored[i, e])}
+           'lost': int(log.lost[i, e]), 'explored': bool(log.explored[i, e]),
+           'viewpoints': viewpoints}
           for i in range(k) for e in range(b)]
 
 

@@ -191,7 +191,8 @@ class Trainer:
     eps = jnp.where(epsilon >= 0, epsilon, agent.epsilon_at(state.actions, t))
     q = self.q_maps(state.params, state.obs)
     occupied = agent.surface_height(state.obs.depth, self.views) > t.explore_min_height
-    action, explored = agent.epsilon_greedy(q, state.changed, occupied, eps, k_act, self.method)
+    maps = agent.rule_maps(q, state.obs.depth, self.views, self.method, self.config)
+    action, explored = agent.epsilon_greedy(maps, state.changed, occupied, eps, k_act, self.method)
     env_states, obs, out = task.step(self.env, self.views, state.env, state.obs, state.failures,
                                      action, self.per_env)
     info, healthy, changed, done = out.info, out.info.healthy, out.changed, out.done

@@ -2,7 +2,7 @@
 3000 actions, every suite evaluated with its 5 runs per case, the tables with our intervals over
 seeds beside the paper's figures.
 
-  mvcoba-reproduce [--methods mvcoba mvcoba_2fcn vpg grasp_only] [--seeds 0 1 2]
+  mvcoba-reproduce [--methods mvcoba mvcoba_2fcn vpg grasp_only mvp cpg] [--seeds 0 1 2]
                    [--actions 3000] [--runs 5] [--suites random ordered occluded]
                    [--workdir runs/reproduction] [--out docs/results/reproduction]
                    [--config default] [--set KEY=VALUE ...]

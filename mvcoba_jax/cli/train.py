@@ -1,7 +1,8 @@
 """Trains a push-and-grasp Q-network on B tabletops in lockstep, then runs a short evaluation.
 
-  mvcoba-train [--config default|paper|tiny|FILE] [--method mvcoba|mvcoba_2fcn|vpg|grasp_only]
-               [--set key=value ...] [--seed N] [--workdir runs/NAME] [--resume]
+  mvcoba-train [--config default|paper|tiny|FILE]
+               [--method mvcoba|mvcoba_2fcn|vpg|grasp_only|mvp|cpg] [--set key=value ...]
+               [--seed N] [--workdir runs/NAME] [--resume]
                [--distributed [--coordinator HOST:PORT --num-processes N --process-id I]]
   mvcoba-train --methods mvcoba vpg --seeds 0 1 2 --workdir runs/sweep [--resume]
 
@@ -162,7 +163,7 @@ def train(args, config, workdir: pathlib.Path, resume: bool) -> int:
   while int(state.actions) < total:
     t0 = time.perf_counter()
     state, log = iterate(state, jnp.bool_(True), jnp.float32(-1.0))
-    new = action_records(log, int(state.actions) - per_iteration)
+    new = action_records(log, int(state.actions) - per_iteration, len(trainer.views))
     records += new
     iteration += 1
     so_far = summary(records)
@@ -195,7 +196,7 @@ def train(args, config, workdir: pathlib.Path, resume: bool) -> int:
   for _ in range(max(1, -(-args.eval_actions // per_iteration))):
     first = int(evaluation.actions)
     evaluation, log = iterate(evaluation, jnp.bool_(False), jnp.float32(0.0))
-    eval_records += action_records(log, first)
+    eval_records += action_records(log, first, len(trainer.views))
   result = summary(eval_records)
   if lead:
     (workdir / 'eval_summary.json').write_text(json.dumps(result, indent=1))

@@ -50,19 +50,22 @@ def _example():
   return module
 
 
-@pytest.fixture(scope='module')
-def run(tmp_path_factory):
-  """A work directory as mvcoba-train leaves it, its checkpoint holding freshly initialised
-  parameters: training would compile MJX programs for minutes, and export reads only these."""
-  config = resolve(TINY)
+def _workdir(config, workdir):
+  """(trainer, workdir, params): a work directory as mvcoba-train leaves it, its checkpoint
+  holding freshly initialised parameters: training would compile for minutes, and export reads
+  only these."""
   trainer = Trainer(config)
   like = jax.eval_shape(trainer.init, jax.random.PRNGKey(config.seed))
   params = trainer.init_params(jax.random.PRNGKey(7))
   state = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), like).replace(params=params)
-  workdir = tmp_path_factory.mktemp('run')
   (workdir / 'config.json').write_text(json.dumps(to_dict(config), indent=1))
   Checkpoints(workdir).save(8, state, {'config': to_dict(config), 'iteration': 4})
   return trainer, workdir, params
+
+
+@pytest.fixture(scope='module')
+def run(tmp_path_factory):
+  return _workdir(resolve(TINY), tmp_path_factory.mktemp('run'))
 
 
 @pytest.fixture(scope='module')
@@ -176,6 +179,42 @@ def test_example_script_prints_the_jax_action_without_jax(run, exported, parity,
     for k in ('x', 'y', 'z'):
       assert abs(got[k] - want[k]) < 1e-6, (k, got, want)
     assert got['primitive_name'] == ('grasp' if changed else 'push')
+
+
+@pytest.mark.parametrize('method', ['mvp', 'cpg'])
+def test_baselines_export_round_trip_with_onnx_parity(method, tmp_path):
+  """MVP (four viewpoints fused in the graph) and CPG (a second output: the suppressed scores
+  its rule compares) export like the others: the folder loads back as the same policy, ONNX
+  matches JAX on every output, and the example picks the agent's action from them."""
+  (tmp_path / 'run').mkdir()
+  trainer, workdir, _ = _workdir(resolve(TINY, [f'network.method={method}']),
+                                 tmp_path / 'run')
+  paths = export.export(workdir, tmp_path / 'export')
+  model_json = json.loads(paths['model_json'].read_text())
+  config, model, step = policy.load(paths['params'].parent)
+  assert config == trainer.config and step == 8
+  views = len(config.scene.cameras)
+  assert model_json['heightmap']['num_views'] == views == (4 if method == 'mvp' else 2)
+  side = perception.grid_size(config)
+  kc, kd = jax.random.split(jax.random.PRNGKey(5))
+  color = jax.random.uniform(kc, (1, views, side, side, 3))
+  depth = 0.1 * jax.random.uniform(kd, (1, views, side, side)) ** 4
+  q = jax.jit(lambda c, d: model(c, d))(color, depth)
+  maps = agent.rule_maps(q, depth, trainer.views, method, config)
+  session = ort.InferenceSession(str(paths['onnx']), providers=['CPUExecutionProvider'])
+  names = [o['name'] for o in model_json['onnx']['outputs']]
+  assert names == (['q', 'score'] if method == 'cpg' else ['q'])
+  got = dict(zip(names, session.run(names, {'color': np.asarray(color),
+                                            'depth': np.asarray(depth)})))
+  assert float(np.abs(got['q'] - np.asarray(q)).max()) < TOLERANCE
+  rule_maps = got[model_json['action_rule']['maps']]
+  np.testing.assert_allclose(rule_maps, np.asarray(maps), rtol=1e-5, atol=TOLERANCE)
+  example = _example()
+  for changed in (False, True):
+    want = agent.greedy_actions(maps, jnp.array([changed]), method)
+    chosen = example.choose(rule_maps[0], changed, model_json)
+    assert [chosen[k] for k in ('primitive', 'rotation', 'row', 'col')] == [
+        int(getattr(want, k)[0]) for k in ('primitive', 'rotation', 'row', 'col')]
 
 
 def test_export_folder_loads_back_as_the_same_policy(run, exported, parity, states):

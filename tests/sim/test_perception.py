@@ -4,7 +4,7 @@ import jax
 import numpy as np
 import pytest
 
-from mvcoba_jax import perception
+from mvcoba_jax import networks, perception
 from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.geometry import pixel_to_world
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case
@@ -80,6 +80,23 @@ def test_full_occluder_hides_everything_from_camera_1_only(env, observe, tmp_pat
   assert not np.asarray(obs.seen[0]).any(), 'camera 1 sees through the occluder'
   assert (np.asarray(obs.depth[1]) > 0.04).sum() > 20
   assert visible_slots(env, obs, 1) == {0, 1}
+
+
+def test_mvp_fuses_its_viewpoints_past_a_blocked_one(tmp_path):
+  """MVP's four camera poses: with the first fully blocked, the fused heightmap its network reads
+  still holds both cubes at their height."""
+  env = make_env('tiny', 'native', 'network.method=mvp')
+  assert len(env.config.scene.cameras) == 4
+  case = read_case(scenario(tmp_path, 'cube blue 0.1 0.12 0\ncube green -0.1 -0.12 0\n'
+                                      'occluder 0 0.3 0 0.49 0\n'))
+  obs = observer(env)([case_to_layout(case, env)])
+  assert not np.asarray(obs.seen[0, 0]).any()
+  color, depth = networks.fuse_views(obs.color, obs.depth)
+  x, y = cell_centres(env)
+  for cx, cy in ((0.1, 0.12), (-0.1, -0.12)):
+    on_top = (np.abs(x - cx) < 0.02) & (np.abs(y - cy) < 0.02)
+    np.testing.assert_allclose(np.asarray(depth[0, 0])[on_top], 0.05, atol=0.002)
+  assert (np.asarray(color[0, 0]).sum(axis=-1) > 0).mean() > 0.95
 
 
 def test_partial_occluders_leave_each_view_an_object_the_other_misses(env, observe, tmp_path):

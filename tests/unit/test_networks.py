@@ -15,7 +15,7 @@ from mvcoba_jax.methods import names as method_names
 from mvcoba_jax.sim import primitives
 from mvcoba_jax.sim.geometry import rotate_images
 
-SIDE, BATCH, ROTATIONS = 32, 2, 16
+SIDE, BATCH, ROTATIONS, VIEWS = 32, 2, 16, 4  # four views: MVP's camera poses
 TINY = NetworkConfig(features=(8, 8), groups=4)
 
 
@@ -28,8 +28,8 @@ def _forward(config):
 
 def _states(key, batch):
   kc, kd = jax.random.split(key)
-  color = jax.random.uniform(kc, (batch, 2, SIDE, SIDE, 3))
-  depth = 0.05 * jax.random.uniform(kd, (batch, 2, SIDE, SIDE))
+  color = jax.random.uniform(kc, (batch, VIEWS, SIDE, SIDE, 3))
+  depth = 0.05 * jax.random.uniform(kd, (batch, VIEWS, SIDE, SIDE))
   return color, depth
 
 
@@ -52,7 +52,7 @@ def test_every_method_gives_finite_maps_of_every_rotation(method_maps):
   method, q, _ = method_maps
   assert q.shape == (BATCH, 2, ROTATIONS, SIDE, SIDE)
   assert np.isfinite(q).all()
-  if method == 'grasp_only':
+  if method in ('grasp_only', 'mvp'):
     assert (q[:, primitives.PUSH] == networks.NO_ACTION).all()
 
 
@@ -61,9 +61,21 @@ def test_each_primitive_reads_only_its_camera(method_maps):
   changed = {p: not np.allclose(q[:, p], q_other_view1[:, p]) for p in (networks.PUSH,
                                                                         networks.GRASP)}
   expected = {'mvcoba': (True, True), 'mvcoba_2fcn': (False, True), 'vpg': (False, False),
-              'grasp_only': (False, False)}[method]
+              'grasp_only': (False, False), 'mvp': (False, True), 'cpg': (False, False)}[method]
   assert (changed[networks.PUSH], changed[networks.GRASP]) == expected
-  assert networks.views_used(method) == ((0,) if method in ('vpg', 'grasp_only') else (0, 1))
+  assert networks.views_used(method) == {'vpg': (0,), 'grasp_only': (0,), 'cpg': (0,),
+                                         'mvp': (0, 1, 2, 3)}.get(method, (0, 1))
+
+
+def test_fusion_keeps_the_highest_point_and_its_colour():
+  """MVP's fusion: per cell the highest point any view saw, coloured by the views that saw it
+  there; a view that saw nothing (0) neither lowers the height nor greys the colour."""
+  depth = jnp.array([[[[0.0, 0.02]], [[0.05, 0.02]], [[0.0, 0.0]]]])  # (1, 3 views, 1, 2)
+  color = jnp.zeros((1, 3, 1, 2, 3)).at[0, 0, 0, 0].set(0.5).at[0, 1, 0, 0].set(1.0)
+  color = color.at[0, 0, 0, 1].set(0.2).at[0, 1, 0, 1].set(0.4)
+  fused_color, fused_depth = networks.fuse_views(color, depth)
+  np.testing.assert_allclose(np.asarray(fused_depth)[0, 0, 0], [0.05, 0.02])
+  np.testing.assert_allclose(np.asarray(fused_color)[0, 0, 0], [[1.0] * 3, [0.3] * 3], atol=1e-6)
 
 
 def test_primitive_channels_match_the_environment():

@@ -1,0 +1,88 @@
+"""CPG's suppression of actions that cannot act, as factors on whole Q maps.
+
+Collaborative Pushing-Grasping (public code `nizhihao/Collaborative-Pushing-Grasping`,
+`utils.policynms_push/grasp` and the action masks of `main.py`) scores a grasp by the share of
+its fingers' landing zones that is free, a push by the share of the strip ahead of it that is
+occupied, allows pushes only from a ring 1-2.5 cm off the objects' edges and multiplies the
+predictions (+0.1) by these. Here every (rotation, cell) gets its factor, in the frame where the
+rotation's push points along +col and the fingers lie along the rows (as the networks see it),
+from box sums of the occupancy; the factor maps are turned back like Q maps.
+
+Departures: CPG factors only the best cell of each rotation and, when all of those are
+suppressed, falls back to the raw maximum; here every cell is factored, so a suppressed cell is
+never chosen while any cell is allowed (the raw maps decide only when none is). CPG allows grasps
+at the centre of each object blob (contours of its mask); here at any cell where something
+stands. Zones are in metres, scaled to this gripper where CPG's were its own.
+"""
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from mvcoba_jax.networks import NO_ACTION
+from mvcoba_jax.sim.geometry import rotate_images, rotation_angle
+from mvcoba_jax.sim.scene import FINGER_HALF, MAX_OPENING
+
+OBJECT_HEIGHT = 0.013  # m: a cell holds an object above this (CPG: 0.618 - 0.605 m)
+PUSH_RING = (0.0105, 0.0245)  # m from an object's edge (CPG: 7 and 15 px dilations at 3.5 mm)
+PUSH_AHEAD = (0.0385, 0.070, 0.014)  # m: strip ahead of a push, from, to, half width (11-20 px)
+# Where this gripper's open fingers land: from 5 mm inside the opening to the outer face, and
+# 5 mm beyond the fingers' width either side (CPG: 10-16 px, +-6 px, its Robotiq's).
+FINGER_ZONE = (MAX_OPENING / 2 - 0.005, MAX_OPENING / 2 + 2 * FINGER_HALF[1], FINGER_HALF[0] + 0.005)
+Q_OFFSET = 0.1  # CPG adds it to the predictions before weighting
+
+
+def _cells(metres: float, resolution: float) -> int:
+  return int(round(metres / resolution))
+
+
+def _box_share(x, rows: tuple[int, int], cols: tuple[int, int]):
+  """Mean of x (N, R, R) over each cell's window [r + rows[0], r + rows[1]] x [c + cols[0],
+  c + cols[1]] (inclusive); outside the map counts as empty."""
+  m = max(abs(v) for v in rows + cols)
+  h, w = rows[1] - rows[0] + 1, cols[1] - cols[0] + 1
+  sums = jax.lax.reduce_window(x, 0.0, jax.lax.add, (1, h, w), (1, 1, 1),
+                               ((0, 0), (m, m), (m, m)))
+  side = x.shape[1]
+  r0, c0 = rows[0] + m, cols[0] + m
+  return sums[:, r0:r0 + side, c0:c0 + side] / (h * w)
+
+
+def _dilate(x, radius: int):
+  """Square dilation of x (N, R, R) by `radius` cells."""
+  size = 2 * radius + 1
+  return jax.lax.reduce_window(x, -jnp.inf, jax.lax.max, (1, size, size), (1, 1, 1), 'SAME')
+
+
+def factors(height, num_rotations: int, resolution: float):
+  """(B, 2, K, R, R) factors in [0, 1] (PUSH, GRASP) of every rotation and cell, from the
+  surface height (B, R, R) the method sees; 0 suppresses."""
+  b, side, _ = height.shape
+  occupied = (height > OBJECT_HEIGHT).astype(jnp.float32)
+  angle = rotation_angle(jnp.arange(num_rotations), num_rotations)
+  turned = rotate_images(jnp.repeat(occupied, num_rotations, axis=0)[..., None],
+                         -jnp.tile(angle, b))[..., 0]  # (B*K, R, R)
+  ahead = (_cells(PUSH_AHEAD[0], resolution), _cells(PUSH_AHEAD[1], resolution))
+  across = _cells(PUSH_AHEAD[2], resolution)
+  push = _box_share(turned, (-across, across), ahead)
+  inner, outer = _cells(FINGER_ZONE[0], resolution), _cells(FINGER_ZONE[1], resolution)
+  width = _cells(FINGER_ZONE[2], resolution)
+  fingers = jnp.maximum(_box_share(turned, (inner, outer), (-width, width)),
+                        _box_share(turned, (-outer, -inner), (-width, width)))
+  maps = jnp.stack([push, 1.0 - fingers], axis=-1)  # (B*K, R, R, 2)
+  maps = rotate_images(maps, jnp.tile(angle, b)).reshape(b, num_rotations, side, side, 2)
+  ring = (_dilate(occupied, _cells(PUSH_RING[1], resolution))
+          * (1.0 - _dilate(occupied, _cells(PUSH_RING[0], resolution))))
+  masks = jnp.stack([ring, occupied], axis=1)[:, :, None]  # (B, 2, 1, R, R)
+  return jnp.clip(jnp.moveaxis(maps, -1, 1), 0.0, 1.0) * masks
+
+
+def scores(q, height, resolution: float):
+  """The maps CPG's rule compares: (Q + 0.1) x factor where the factor allows, NO_ACTION where
+  it suppresses; for a state with no allowed action at all, its raw Q maps. `q` (B, 2, K, R, R)
+  holds every rotation in order."""
+  f = factors(height, q.shape[2], resolution)
+  allowed = f > 0
+  weighted = jnp.where(allowed, (q + Q_OFFSET) * f, NO_ACTION)
+  anything = jnp.any(allowed, axis=(1, 2, 3, 4), keepdims=True)
+  return jnp.where(anything, weighted, q)

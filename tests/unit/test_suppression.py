@@ -1,0 +1,68 @@
+"""CPG's suppression: which actions it lets act, and that its rule never picks a suppressed one."""
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from mvcoba_jax import agent, networks, suppression
+from mvcoba_jax.config import resolve
+from mvcoba_jax.sim.primitives import GRASP, PUSH
+
+RES, SIDE, K = 0.004, 112, 16
+factors = jax.jit(lambda h: suppression.factors(h, K, RES))
+
+
+def blocks(*cells):
+  """(1, R, R) heights: a 5 cm cube (12 x 12 cells) with its top-left cell at each (row, col)."""
+  h = np.zeros((1, SIDE, SIDE), np.float32)
+  for r, c in cells:
+    h[0, r:r + 12, c:c + 12] = 0.05
+  return jnp.asarray(h)
+
+
+def test_fingers_landing_on_a_neighbour_suppress_the_grasp():
+  """Two cubes side by side along x (cols), one cell apart: a grasp at the first's centre is
+  free with the fingers along y (rotation 0) and suppressed along x (rotation 4, on the other
+  cube); no grasp on bare table."""
+  f = np.asarray(factors(blocks((50, 50), (50, 63))))
+  assert f[0, GRASP, 0, 56, 56] == 1.0
+  assert f[0, GRASP, 4, 56, 56] == 0.0
+  assert f[0, GRASP, 0, 20, 20] == 0.0
+
+
+def test_pushes_need_something_ahead_and_start_off_an_edge():
+  f = np.asarray(factors(blocks((50, 50))))
+  assert f[0, PUSH, 0, 56, 46] > 0.5  # 1-2.5 cm left of the cube, pushing +x into it
+  assert f[0, PUSH, 8, 56, 46] == 0.0  # the same start pushing away
+  assert f[0, PUSH, 0, 56, 30] == 0.0  # 8 cm off: outside CPG's ring
+  assert f[0, PUSH, 0, 56, 56] == 0.0  # on top of the cube
+
+
+@pytest.mark.parametrize('seed', range(4))
+def test_the_rule_never_picks_a_suppressed_action(seed):
+  """Random Q maps over a random clutter of cubes: CPG's greedy action always has a factor above
+  0, and the raw maxima it passes over are suppressed ones."""
+  rng = np.random.default_rng(seed)
+  heights = np.concatenate([blocks(*rng.integers(5, 95, (6, 2))) for _ in range(3)])
+  q = jax.random.normal(jax.random.PRNGKey(seed), (3, 2, K, SIDE, SIDE))
+  depth = jnp.asarray(heights)[:, None]  # one view
+  config = resolve('default')
+  maps = agent.rule_maps(q, depth, (0,), 'cpg', config)
+  action = agent.greedy_actions(maps, jnp.ones(3, bool), 'cpg')
+  f = np.asarray(factors(jnp.asarray(heights)))
+  picked = f[np.arange(3), np.asarray(action.primitive), np.asarray(action.rotation),
+             np.asarray(action.row), np.asarray(action.col)]
+  assert (picked > 0).all(), picked
+  raw = agent.greedy_actions(q, jnp.ones(3, bool), 'vpg')
+  raw_f = f[np.arange(3), np.asarray(raw.primitive), np.asarray(raw.rotation),
+            np.asarray(raw.row), np.asarray(raw.col)]
+  changed = np.asarray(raw.row) != np.asarray(action.row)
+  assert (raw_f[changed] == 0).all() and changed.any()
+
+
+def test_with_nothing_allowed_the_raw_maps_decide():
+  q = jax.random.normal(jax.random.PRNGKey(0), (1, 2, K, SIDE, SIDE))
+  empty = jnp.zeros((1, 1, SIDE, SIDE))
+  maps = agent.rule_maps(q, empty, (0,), 'cpg', resolve('default'))
+  np.testing.assert_array_equal(np.asarray(maps), np.asarray(q))
+  assert not np.any(np.asarray(maps) == networks.NO_ACTION)
