@@ -37,9 +37,16 @@ def _lookup(flat: dict, key: str) -> dict:
   return {k: v for k, v in flat.items() if k == key or k.startswith(key + '.')}
 
 
-def incompatibilities(saved: dict, current: dict) -> list[str]:
-  """Human-readable differences in the shape-defining config keys (both as JSON would hold them)."""
-  a, b = _flatten(saved), _flatten(json.loads(json.dumps(current)))
+def incompatibilities(saved: dict, current: dict, where) -> list[str]:
+  """Human-readable differences in the shape-defining config keys (both as JSON would hold them).
+
+  Fields that `saved` lacks (added since it was written) take their defaults, as they do when
+  its run's config.json is loaded; `where` names the checkpoint in errors."""
+  try:
+    saved = config_lib.to_dict(config_lib.from_dict(saved))
+  except config_lib.ConfigError as e:
+    raise CheckpointError(f'checkpoint {where}: its saved config: {e}') from None
+  a, b = _flatten(json.loads(json.dumps(saved))), _flatten(json.loads(json.dumps(current)))
   problems = []
   for key in SHAPE_KEYS:
     sa, sb = _lookup(a, key), _lookup(b, key)
@@ -96,7 +103,8 @@ class Checkpoints:
     """(state, meta) of `step` (default: the latest), checked against `config` first."""
     step = self._step(step)
     meta = self.meta(step)
-    problems = incompatibilities(meta['config'], config_lib.to_dict(config))
+    problems = incompatibilities(meta['config'], config_lib.to_dict(config),
+                                 self.directory / str(step))
     if problems:
       raise CheckpointError(f'checkpoint {self.directory / str(step)} was written by a run of '
                             'another shape; it cannot be resumed here:\n  ' + '\n  '.join(problems))

@@ -45,6 +45,12 @@ class Trace:
   col: jnp.ndarray
   grasp_success: jnp.ndarray  # (N, T) bool
   active: jnp.ndarray  # (N, T) bool: the run had not finished, so the step counts
+  # For videos (`video.py`; `evaluate` fills them): qpos at the env's `frames` points of each
+  # primitive (F may be 0), the slots' colours and the occluders' poses.
+  frames: jnp.ndarray | None = None  # (N, T, F, nq)
+  slot_color: jnp.ndarray | None = None  # (N, T, M, 3) uint8
+  mocap_pos: jnp.ndarray | None = None  # (N, T, K, 3)
+  mocap_quat: jnp.ndarray | None = None  # (N, T, K, 4)
 
 
 @struct.dataclass
@@ -99,16 +105,22 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
               lost=zeros, objects=jnp.sum(states.in_play, axis=1, dtype=jnp.int32),
               failures=zeros, finished=jnp.zeros(n, bool), completed=jnp.zeros(n, bool))
 
-  def snapshot(obs, states, action: agent.PixelAction, left, grasp_success, active) -> Trace:
+  def snapshot(obs, states, action: agent.PixelAction, info, active) -> Trace:
     """One step of every run (N, ...), as the trace keeps it."""
     return Trace(color=perception.color_to_uint8(obs.color),
-                 object_xyz=jax.vmap(env.object_positions)(states), left_workspace=left,
-                 primitive=action.primitive, rotation=action.rotation, row=action.row,
-                 col=action.col, grasp_success=grasp_success, active=active)
+                 object_xyz=jax.vmap(env.object_positions)(states),
+                 left_workspace=info.left_workspace, primitive=action.primitive,
+                 rotation=action.rotation, row=action.row, col=action.col,
+                 grasp_success=info.grasp_success, active=active, frames=info.frames,
+                 slot_color=perception.color_to_uint8(states.color),
+                 mocap_pos=states.sim.mocap_pos, mocap_quat=states.sim.mocap_quat)
 
   if record:
-    step = snapshot(obs, states, agent.PixelAction(zeros, zeros, zeros, zeros), states.in_play,
-                    runs.finished, runs.finished)
+    shapes = jax.eval_shape(lambda s, a: jax.vmap(env.step)(s, a)[1], states,
+                            agent.to_world(agent.PixelAction(zeros, zeros, zeros, zeros),
+                                           obs.depth, views, env.config))
+    step = snapshot(obs, states, agent.PixelAction(zeros, zeros, zeros, zeros),
+                    jax.tree.map(lambda x: jnp.zeros(x.shape, x.dtype), shapes), runs.finished)
     runs = runs.replace(trace=jax.tree.map(
         lambda x: jnp.zeros((n, max_actions) + x.shape[1:], x.dtype), step))
   carry = (states, obs, jnp.ones(n, bool), runs, k_loop, jnp.int32(0))
@@ -131,8 +143,7 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
         completed=runs.completed | (active & out.cleared & (picked == runs.objects)))
     if record:
       runs = runs.replace(trace=jax.tree.map(lambda buf, x: buf.at[:, t].set(x), runs.trace,
-                                             snapshot(obs, states, action, info.left_workspace,
-                                                      info.grasp_success, active)))
+                                             snapshot(obs, states, action, info, active)))
     if progress is not None:
       jax.debug.callback(progress, t + 1, jnp.sum(runs.finished))
     return (where_envs(active, next_states, states), where_envs(active, next_obs, obs),

@@ -65,7 +65,8 @@ def load(workdir) -> tuple[Config, networks.QNetwork, int]:
     raise PolicyError(f'no checkpoint in {checkpoints.directory}')
   where = checkpoints.directory / str(step)
   try:
-    problems = incompatibilities(checkpoints.meta(step)['config'], config_lib.to_dict(config))
+    problems = incompatibilities(checkpoints.meta(step)['config'], config_lib.to_dict(config),
+                                 where)
   except CheckpointError as e:
     raise PolicyError(str(e)) from None
   if problems:

@@ -26,7 +26,7 @@ import jax
 from tqdm import tqdm
 
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import evaluation, runtime, viz
+from mvcoba_jax import evaluation, runtime, video, viz
 from mvcoba_jax import report as report_lib
 from mvcoba_jax.policy import PolicyError, load
 from mvcoba_jax.sim.scenarios import (
@@ -68,6 +68,9 @@ def main(argv=None) -> int:
   parser.add_argument('--seed', type=int, default=0)
   parser.add_argument('--save-visuals', action='store_true',
                       help='write a PNG strip of heightmaps and actions per run')
+  parser.add_argument('--video', action='store_true',
+                      help=f'write an MP4 per run: the scene and the gripper, '
+                           f'{video.FRAMES_PER_PRIMITIVE} frames per primitive')
   parser.add_argument('--blocks', nargs='+', default=[], metavar='[SUITE=]TABLE',
                       help='block table for VPG-format (.txt) case files: vpg (default), mvcoba '
                            '(the MV-COBA authors\' block set); SUITE=TABLE for one suite only')
@@ -126,7 +129,8 @@ def main(argv=None) -> int:
     rows = {}
     for i, source in enumerate(sources):
       config = base if isinstance(source, str) else source[0]
-      env = Tabletop(evaluation.suite_config(config, evaluation.pool_for(cases)))
+      env = Tabletop(evaluation.suite_config(config, evaluation.pool_for(cases)),
+                     frames=video.FRAMES_PER_PRIMITIVE if args.video else 0)
       method, policy, views = evaluation.make_policy(source, env.config)
       method = labels[i] if i < len(labels) else method
       layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(args.runs)])
@@ -139,12 +143,17 @@ def main(argv=None) -> int:
           bar.set_postfix_str(f'{int(finished)}/{n} runs finished', refresh=False)
           bar.update(int(done) - bar.n)
         runs = jax.jit(lambda l, k: evaluation.evaluate(
-            env, policy, views, l, k, args.max_actions, record=args.save_visuals,
-            progress=progress))(layouts, keys)
+            env, policy, views, l, k, args.max_actions,
+            record=args.save_visuals or args.video, progress=progress))(layouts, keys)
         logs = evaluation.run_logs(runs)
+      run_names = [f'{n}_run{r}' for n in names for r in range(args.runs)]
+      where = pathlib.Path(pathlib.Path(suite).name) / method.replace(':', '_')
+      if args.video:
+        paths = video.write_run_videos(jax.device_get(runs.trace), run_names,
+                                       out / 'videos' / where, env)
+        print(f'  {len(paths)} videos in {out / "videos" / where}', flush=True)
       if args.save_visuals:
-        folder = out / 'visuals' / pathlib.Path(suite).name / method.replace(':', '_')
-        run_names = [f'{n}_run{r}' for n in names for r in range(args.runs)]
+        folder = out / 'visuals' / where
         viz.write_run_strips(jax.device_get(runs.trace), run_names, folder, env.config)
         lost = evaluation.losses(runs.trace, run_names, env.config)
         (folder / 'losses.json').write_text(json.dumps(lost, indent=1))

@@ -36,14 +36,17 @@ class MjxPhysics:
     return mjx.make_data(self.model).replace(qpos=sim.qpos, qvel=sim.qvel,
                                              mocap_pos=sim.mocap_pos, mocap_quat=sim.mocap_quat)
 
-  def simulate(self, sim: SimState, parked, ctrl) -> tuple[SimState, jnp.ndarray]:
-    """Steps one tabletop through `ctrl` (T, nu); returns the state and whether MuJoCo was
-    content (MJX raises no warnings: always True; the caller checks finiteness)."""
+  def simulate(self, sim: SimState, parked, ctrl, frames: tuple[int, ...] = ()):
+    """Steps one tabletop through `ctrl` (T, nu); returns the state, whether MuJoCo was content
+    (MJX raises no warnings: always True; the caller checks finiteness) and qpos after each step
+    of `frames` (F, nq)."""
     pin = self._parking.pin
     def body(d, c):
-      return pin(mjx.step(self.model, d.replace(ctrl=c)), parked), None
-    data, _ = jax.lax.scan(body, self._data(sim), ctrl)
-    return sim.replace(qpos=data.qpos, qvel=data.qvel), jnp.bool_(True)
+      d = pin(mjx.step(self.model, d.replace(ctrl=c)), parked)
+      return d, d.qpos if frames else None
+    data, path = jax.lax.scan(body, self._data(sim), ctrl)
+    at = path[jnp.asarray(frames)] if frames else jnp.zeros((0,) + sim.qpos.shape, jnp.float32)
+    return sim.replace(qpos=data.qpos, qvel=data.qvel), jnp.bool_(True), at
 
   def cast(self, sim: SimState, origins: np.ndarray, directions: np.ndarray):
     """Distance (P,) and geom id (P,) of every ray of one tabletop; -1 for a miss."""

@@ -15,6 +15,7 @@ tabletops run to completion.
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 import os
 import threading
@@ -74,7 +75,7 @@ class NativePhysics:
     b.mocap_pos[:] = mocap_pos.reshape(b.mocap_pos.shape)
     b.mocap_quat[:] = mocap_quat.reshape(b.mocap_quat.shape)
 
-  def _simulate_host(self, *arrays):
+  def _simulate_host(self, frames: tuple[int, ...], *arrays):
     # JAX hands over jax.Arrays on the CPU: viewed as NumPy (no copy), no JAX op runs in here.
     qpos, qvel, mocap_pos, mocap_quat, parked, ctrl = (np.asarray(a) for a in arrays)
     lead = qpos.shape[:-1]
@@ -87,25 +88,34 @@ class NativePhysics:
       gravcomp[:] = self._gravcomp
       gravcomp[:, self._slot_bodies] = parked
       b.warning[:] = 0
+      record = {}
       try:
-        b.rollout(ctrl.shape[-2], ctrl.reshape(n, ctrl.shape[-2], -1), record=())
+        record = b.rollout(ctrl.shape[-2], ctrl.reshape(n, ctrl.shape[-2], -1),
+                           record=('qpos',) if frames else ())
       except mjbatch.SimulationError as error:
         ok[error.ids] = False
       ok &= ~np.any(b.warning[..., 1] > 0, axis=-1)
       qpos_out = b.qpos.astype(np.float32).reshape(lead + qpos.shape[-1:])
       qvel_out = b.qvel.astype(np.float32).reshape(lead + qvel.shape[-1:])
-    return qpos_out, qvel_out, ok.reshape(lead)
+      if 'qpos' in record:
+        at = record['qpos'][:, list(frames)]
+      else:  # no pictures asked for, or the call failed: where it stopped
+        at = np.repeat(b.qpos[:, None], len(frames), axis=1)
+    return qpos_out, qvel_out, ok.reshape(lead), at.astype(np.float32).reshape(
+        lead + (len(frames), qpos.shape[-1]))
 
-  def simulate(self, sim: SimState, parked, ctrl) -> tuple[SimState, jnp.ndarray]:
+  def simulate(self, sim: SimState, parked, ctrl, frames: tuple[int, ...] = ()):
     """Steps one tabletop through `ctrl` (T, nu) (vmap it: the host gets the batch in one call);
-    returns the state and whether MuJoCo ran it without a warning or an error."""
+    returns the state, whether MuJoCo ran it without a warning or an error, and qpos after each
+    step of `frames` (F, nq) (recorded only when asked: a few pictures of a primitive)."""
     shapes = (jax.ShapeDtypeStruct(sim.qpos.shape, jnp.float32),
               jax.ShapeDtypeStruct(sim.qvel.shape, jnp.float32),
-              jax.ShapeDtypeStruct((), jnp.bool_))
-    qpos, qvel, ok = jax.pure_callback(
-        self._simulate_host, shapes, sim.qpos, sim.qvel, sim.mocap_pos, sim.mocap_quat, parked,
-        ctrl, vmap_method='broadcast_all')
-    return sim.replace(qpos=qpos, qvel=qvel), ok
+              jax.ShapeDtypeStruct((), jnp.bool_),
+              jax.ShapeDtypeStruct((len(frames),) + sim.qpos.shape, jnp.float32))
+    qpos, qvel, ok, at = jax.pure_callback(
+        functools.partial(self._simulate_host, tuple(frames)), shapes, sim.qpos, sim.qvel,
+        sim.mocap_pos, sim.mocap_quat, parked, ctrl, vmap_method='broadcast_all')
+    return sim.replace(qpos=qpos, qvel=qvel), ok, at
 
   def _cast_host(self, origins, directions, *arrays):
     qpos, mocap_pos, mocap_quat = (np.asarray(a) for a in arrays)

@@ -52,6 +52,7 @@ class StepInfo:
   lost: jnp.ndarray  # int32: objects that left the workspace during this step
   left_workspace: jnp.ndarray  # (M,) bool: which objects those were
   healthy: jnp.ndarray  # bool
+  frames: jnp.ndarray  # (F, nq) qpos at `Tabletop.frames` points of the primitive (F may be 0)
 
 
 def where_envs(mask, new, old):
@@ -73,7 +74,8 @@ def make_backend(scene: Scene):
 class Tabletop:
   """Static description of the environment; its methods are pure functions of the state."""
 
-  def __init__(self, config: TabletopConfig):
+  def __init__(self, config: TabletopConfig, frames: int = 0):
+    """`frames`: how many snapshots of each primitive `step` returns (for videos; 0: none)."""
     self.config = config
     self.scene = build_scene(config.scene)
     self.backend = make_backend(self.scene)
@@ -85,6 +87,8 @@ class Tabletop:
       raise ValueError(f'env.num_objects={config.env.num_objects} exceeds the '
                        f'{self.num_slots} object slots of scene.pool')
     self.script = primitives.make_script(config.env, config.scene.timestep)
+    length = self.script.length
+    self.frames = tuple(int(round((i + 1) * length / frames)) - 1 for i in range(frames))
     self._qpos_idx = self._parking.qpos_idx
     self._grip_qpos = jnp.asarray(idx.gripper_qpos)
     self._grip_qvel = jnp.asarray(idx.gripper_qvel)
@@ -104,10 +108,11 @@ class Tabletop:
     return sim.replace(qpos=sim.qpos.at[self._grip_qpos].set(pose),
                        qvel=sim.qvel.at[self._grip_qvel].set(0.0))
 
-  def _simulate(self, sim: SimState, in_play, ctrl) -> tuple[SimState, jnp.ndarray]:
-    """Steps through the actuator targets `ctrl` (T, 6); also whether the physics stayed sound."""
-    sim, ok = self.backend.simulate(sim, ~in_play, ctrl)
-    return sim, ok & self._health(sim)
+  def _simulate(self, sim: SimState, in_play, ctrl, frames: tuple[int, ...] = ()):
+    """Steps through the actuator targets `ctrl` (T, 6); also whether the physics stayed sound,
+    and qpos after each step of `frames`."""
+    sim, ok, at = self.backend.simulate(sim, ~in_play, ctrl, frames)
+    return sim, ok & self._health(sim), at
 
   def _health(self, sim: SimState):
     finite = jnp.all(jnp.isfinite(sim.qpos)) & jnp.all(jnp.isfinite(sim.qvel))
@@ -190,7 +195,7 @@ class Tabletop:
     """Places the objects of `layout` (a test case or a random drop) and lets them settle."""
     state = self.place(layout, key)
     hold = jnp.broadcast_to(self._gripper_park, (self.config.env.settle_steps, 6))
-    sim, healthy = self._simulate(state.sim, state.in_play, hold)
+    sim, healthy, _ = self._simulate(state.sim, state.in_play, hold)
     in_play = state.in_play & self._in_workspace(sim)
     return state.replace(sim=self._finish(sim, in_play), in_play=in_play, healthy=healthy)
 
@@ -202,7 +207,7 @@ class Tabletop:
     z_before = sim.qpos[self._qpos_idx[:, 2]]
     ctrl = jax.vmap(lambda t: primitives.target(self.script, action, env, t))(
         jnp.arange(self.script.length))
-    sim, healthy = self._simulate(sim, state.in_play, ctrl)
+    sim, healthy, frames = self._simulate(sim, state.in_play, ctrl, self.frames)
 
     z_after = sim.qpos[self._qpos_idx[:, 2]]
     fingers = sim.qpos[self._grip_qpos[4:]]
@@ -212,7 +217,8 @@ class Tabletop:
     lost = state.in_play & ~picked & ~self._in_workspace(sim)
     in_play = state.in_play & ~picked & ~lost
     info = StepInfo(grasp_success=jnp.any(picked), picked=jnp.sum(picked, dtype=jnp.int32),
-                    lost=jnp.sum(lost, dtype=jnp.int32), left_workspace=lost, healthy=healthy)
+                    lost=jnp.sum(lost, dtype=jnp.int32), left_workspace=lost, healthy=healthy,
+                    frames=frames)
     state = state.replace(sim=self._finish(sim, in_play), in_play=in_play,
                           picked=state.picked + info.picked, lost=state.lost + info.lost,
                           healthy=healthy)

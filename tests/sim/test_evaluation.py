@@ -7,7 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from mvcoba_jax import evaluation, metrics, perception, viz
+from mvcoba_jax import evaluation, metrics, perception, video, viz
 from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.config import resolve
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts
@@ -93,11 +93,11 @@ def test_overlapping_case_is_refused_before_compiling_naming_both_lines(tmp_path
   assert "unknown block table 'lego'" in capsys.readouterr().err
 
 
-def test_eval_cli_writes_tables_and_visuals(setup, tmp_path, capsys):
+def test_eval_cli_writes_tables_visuals_and_videos(setup, tmp_path, capsys):
   folder = setup[0]
   code = eval_cli.main(['--baseline', 'heuristic', '--suite', str(folder), '--config',
                         'tiny', '--runs', '1', '--max-actions', str(MAX_ACTIONS),
-                        '--out', str(tmp_path / 'out'), '--save-visuals'])
+                        '--out', str(tmp_path / 'out'), '--save-visuals', '--video'])
   assert code == 0
   captured = capsys.readouterr()
   assert '/2 runs finished' in captured.err  # progress from inside the jitted loop
@@ -117,6 +117,17 @@ def test_eval_cli_writes_tables_and_visuals(setup, tmp_path, capsys):
   image = cv2.imread(str(strips[0]))
   side = image.shape[0] // 2  # two views stacked, each a square heightmap scaled up
   assert image.shape[1] == actions * (side + 4) - 4
+  # One MP4 per run: every action it took, video.FRAMES_PER_PRIMITIVE frames each, readable.
+  videos = tmp_path / 'out' / 'videos' / folder.name / 'baseline_heuristic'
+  assert sorted(p.name for p in videos.glob('*.mp4')) == ['pair_run0.mp4', 'three_run0.mp4']
+  capture = cv2.VideoCapture(str(videos / 'pair_run0.mp4'))
+  frames = []
+  while (frame := capture.read())[0]:
+    frames.append(frame[1])
+  assert len(frames) == actions * video.FRAMES_PER_PRIMITIVE
+  assert frames[0].shape == (video.CAMERA.height, video.CAMERA.width, 3)
+  # The gripper moves within a primitive: its first and last frames differ.
+  assert np.abs(frames[0].astype(int) - frames[video.FRAMES_PER_PRIMITIVE - 1]).mean() > 1
 
 
 def test_run_strip_draws_each_action_where_it_was_taken():

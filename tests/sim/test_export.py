@@ -50,17 +50,31 @@ def _example():
   return module
 
 
-def _workdir(config, workdir):
+def _workdir(config, workdir, saved=None):
   """(trainer, workdir, params): a work directory as mvcoba-train leaves it, its checkpoint
   holding freshly initialised parameters: training would compile for minutes, and export reads
-  only these."""
+  only these. `saved`: the config as config.json and the checkpoint hold it (default: all of
+  `config`)."""
   trainer = Trainer(config)
   like = jax.eval_shape(trainer.init, jax.random.PRNGKey(config.seed))
   params = trainer.init_params(jax.random.PRNGKey(7))
   state = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), like).replace(params=params)
-  (workdir / 'config.json').write_text(json.dumps(to_dict(config), indent=1))
-  Checkpoints(workdir).save(8, state, {'config': to_dict(config), 'iteration': 4})
+  saved = to_dict(config) if saved is None else saved
+  (workdir / 'config.json').write_text(json.dumps(saved, indent=1))
+  Checkpoints(workdir).save(8, state, {'config': saved, 'iteration': 4})
   return trainer, workdir, params
+
+
+def test_run_saved_before_a_config_field_existed_still_loads(tmp_path):
+  """config.json and the checkpoint of a run older than scene.press_force both lack it: both take
+  its default, the policy loads, and the warning names the field."""
+  config = resolve(TINY)
+  saved = to_dict(config)
+  del saved['scene']['press_force']
+  _workdir(config, tmp_path, saved)
+  with pytest.warns(UserWarning, match='scene.press_force=5.0'):
+    loaded, _, step = policy.load(tmp_path)
+  assert loaded == config and step == 8
 
 
 @pytest.fixture(scope='module')
