@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from mvcoba_jax.config import resolve
-from mvcoba_jax.evaluation import case_problems, pool_for, suite_config
+from mvcoba_jax.evaluation import case_problems, pool_for, settled_starts, suite_config
 from mvcoba_jax.occlusion import visibility
 from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.geometry import quat_mul, yaw_quat
@@ -245,9 +245,24 @@ def test_public_vpg_cases_do_not_interpenetrate(public_cases):
 SHIPPED = {'random': (6, 20, 40), 'ordered': (6, 4, 17), 'occluded': (3, 4, 5)}
 
 
+def random_texts():
+  """The random cases as `generate.random_case` writes them from the draws each file says were
+  passed over: the placement is NumPy alone, so this does not depend on the physics that chose
+  the draws (that the heaps stay on the table is tested below, on the physics)."""
+  texts = []
+  for seed, path in enumerate(sorted((SUITES_DIR / 'random').glob('*.scn'))):
+    lines = path.read_text().splitlines()
+    skip = [int(d) for line in lines if line.startswith('# draws passed over:')
+            for d in line.split(':')[1].split()]
+    objects = sum(1 for line in lines if not line.startswith('#')) - 1  # the isolated one
+    texts.append(generate.random_case(objects, seed, frozenset(skip))[0])
+  return texts
+
+
 @pytest.fixture(scope='module')
 def generated():
-  return generate.suites()
+  return {'random': random_texts(), 'ordered': generate.ordered_cases(),
+          'occluded': generate.occluded_cases()}
 
 
 @pytest.mark.parametrize('suite', sorted(SHIPPED))
@@ -265,6 +280,16 @@ def test_shipped_suites_are_generated_and_start_apart(suite, generated):
   for case in cases:
     deepest = deepest_overlap(env, case_to_layout(case, env))
     assert deepest < 0.002, (case.name, deepest)
+
+
+def test_random_heaps_stay_on_the_table():
+  """Every object of every random case stays in the workspace while the case settles as
+  mvcoba-eval starts its runs (its jitters, two runs)."""
+  cases = [read_case(f) for f in sorted((SUITES_DIR / 'random').glob('*.scn'))]
+  env, states = settled_starts(cases, resolve('default'), 2)
+  in_play = np.asarray(states.in_play).reshape(len(cases), 2, -1).sum(axis=-1)
+  listed = np.array([len(c.objects) for c in cases])
+  assert (in_play == listed[:, None]).all(), dict(zip([c.name for c in cases], in_play.tolist()))
 
 
 # ------------------------------------------------------------------------------ layouts
