@@ -286,7 +286,7 @@ def test_random_heaps_stay_on_the_table():
   """Every object of every random case stays in the workspace while the case settles as
   mvcoba-eval starts its runs (its jitters, two runs)."""
   cases = [read_case(f) for f in sorted((SUITES_DIR / 'random').glob('*.scn'))]
-  env, states = settled_starts(cases, resolve('default'), 2)
+  _, states = settled_starts(cases, resolve('default'), 2)
   in_play = np.asarray(states.in_play).reshape(len(cases), 2, -1).sum(axis=-1)
   listed = np.array([len(c.objects) for c in cases])
   assert (in_play == listed[:, None]).all(), dict(zip([c.name for c in cases], in_play.tolist()))
