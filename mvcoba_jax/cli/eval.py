@@ -1,7 +1,7 @@
 """Evaluates trained policies (or a baseline) on test suites and prints the paper's tables.
 
   mvcoba-eval --checkpoint runs/train [runs/vpg ...] [--suite random|ordered|occluded|isolated|vpg|all|PATH ...]
-              [--runs 5] [--max-actions 60] [--out eval_out] [--save-visuals]
+              [--runs 5] [--max-actions 60] [--out eval_out] [--save-visuals] [--video]
   mvcoba-eval --baseline heuristic --suite ordered        # no checkpoint needed
   mvcoba-eval --compare runs/mvcoba runs/vpg ...          # same as several --checkpoint
   mvcoba-eval --tables runs/eval-a runs/eval-b --out X    # one table from earlier --out folders
@@ -13,6 +13,7 @@ killed evaluation keeps what it finished. --tables joins the results of evaluati
 parallel, or on other machines) into one table, with no compile. With --save-visuals, each run also
 gets a PNG strip of its heightmaps and actions in --out/visuals/SUITE/METHOD/, beside losses.json:
 every object that left the workspace, the action it left in and where it was when it began.
+With --video, each run gets an MP4 of the scene and the gripper in --out/videos/SUITE/METHOD/.
 """
 from __future__ import annotations
 
