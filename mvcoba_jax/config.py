@@ -290,6 +290,22 @@ def resolve(preset: str | pathlib.Path | None, overrides: typing.Sequence[str] =
   return validate(config)
 
 
+# What a trained policy's network was built for: no --set of these at evaluation.
+FIXED_BY_TRAINING = ('network.', 'perception.', 'env.num_rotations', 'scene.workspace_half')
+
+
+def evaluated(config: Config, overrides: typing.Sequence[str]) -> Config:
+  """A trained policy's config with an evaluation's `--set` overrides (physics, episode), which
+  may not touch what training fixed (`FIXED_BY_TRAINING`)."""
+  for assignment in overrides:
+    key = assignment.split('=', 1)[0].strip()
+    if key.startswith(FIXED_BY_TRAINING):
+      raise ConfigError(f'--set {key}: fixed by the trained policy\'s network (its network, '
+                        'perception, rotations and workspace); it cannot change at evaluation')
+    config = override(config, assignment)
+  return validate(config)
+
+
 def to_dict(config) -> dict:
   return dataclasses.asdict(config)
 

@@ -105,7 +105,9 @@ def main(argv=None) -> int:
                      for f in files]
               for name, files in suite_files(args.suite).items()}
     overlapping = [m for cases in suites.values() for m in evaluation.case_problems(cases, base)]
-    sources = [load(d) for d in args.checkpoint] + ([args.baseline] if args.baseline else [])
+    sources = [(config_lib.evaluated(c, args.overrides), model, step)
+               for c, model, step in map(load, args.checkpoint)]
+    sources += [args.baseline] if args.baseline else []
     labels = report_lib.row_labels(args.checkpoint, [s[0].network.method for s in sources
                                                      if not isinstance(s, str)])
   except (config_lib.ConfigError, ScenarioError, PolicyError) as e:

@@ -11,6 +11,7 @@ from mvcoba_jax.config import (
   Config,
   ConfigError,
   defaulted,
+  evaluated,
   from_dict,
   resolve,
   to_dict,
@@ -119,3 +120,14 @@ def test_saved_config_without_a_newer_field_gets_what_its_run_used():
   del saved['train']['target']
   config = from_dict(saved)
   assert config.train.target == 'network' and defaulted(saved, config) == {}
+
+
+def test_evaluation_overrides_change_physics_not_what_training_fixed():
+  """`mvcoba-eval --set` applies to every trained policy's config: its physics and episode may
+  change, its network, perception, rotations and workspace may not."""
+  trained = resolve('tiny')
+  assert evaluated(trained, ['scene.press_force=60']).scene.press_force == 60.0
+  for key, value in (('network.trunk', 'densenet121'), ('perception.change_min', '0.02'),
+                     ('env.num_rotations', '8'), ('scene.workspace_half', '0.2')):
+    with pytest.raises(ConfigError, match=f'--set {key}: fixed by the trained policy'):
+      evaluated(trained, [f'{key}={value}'])
