@@ -21,7 +21,13 @@ from mvcoba_jax import agent, networks, perception, task
 from mvcoba_jax.config import Config
 from mvcoba_jax.metrics import RunLog
 from mvcoba_jax.sim.geometry import pixel_to_world, quat_mul, yaw_quat
-from mvcoba_jax.sim.scenarios import case_to_layout, overlaps, stack_layouts
+from mvcoba_jax.sim.scenarios import (
+  case_slots,
+  case_to_layout,
+  half_height,
+  overlaps,
+  stack_layouts,
+)
 from mvcoba_jax.sim.tabletop import Layout, Tabletop, where_envs
 
 POSITION_NOISE = 0.002  # m, per axis, on each object's start position
@@ -245,15 +251,40 @@ def settled_starts(cases, config, runs: int, seed: int = 0):
   return env, jax.jit(lambda l, k: start(env, l, k)[0])(layouts, keys)
 
 
-def case_problems(cases, config) -> list[str]:
-  """Objects of `cases` that interpenetrate as placed, in the scene a suite of them gets; raises
-  ScenarioError for a case that does not fit it (occluder slots)."""
+SETTLE_MOVE = 0.01  # m an object listed on the table may move while its case settles
+ON_TABLE = 0.005  # m: listed within this of its resting height, an object is on the table
+
+
+def case_problems(cases, config, settle_move: float = SETTLE_MOVE) -> list[str]:
+  """What is wrong with `cases` as loaded, in the scene a suite of them gets: one message per
+  object, naming its file and line. Objects that interpenetrate as placed; then, in the cases
+  with none, objects that leave the workspace while the case settles as written, and objects
+  listed on the table that move more than `settle_move` (objects set down on others settle onto
+  the heap). Raises ScenarioError for a case that does not fit the scene (occluder slots)."""
   env = Tabletop(suite_config(config, pool_for(cases)))
   problems = []
   for case in cases:
     case_to_layout(case, env)
-    problems += overlaps(case, env)
-  return problems
+    problems.append(overlaps(case, env))
+  clean = [i for i, p in enumerate(problems) if not p]
+  if clean:
+    layouts = [case_to_layout(cases[i], env) for i in clean]
+    states = jax.jit(jax.vmap(env.reset_from_case))(stack_layouts(layouts))
+    in_play = np.asarray(states.in_play)
+    listed = np.stack([np.asarray(layout.pos) for layout in layouts])
+    moved = np.linalg.norm(np.asarray(jax.vmap(env.object_positions)(states))[..., :2]
+                           - listed[..., :2], axis=-1)
+    for row, i in enumerate(clean):
+      case = cases[i]
+      for slot, obj in zip(case_slots(case, env), case.objects):
+        where = f'{case.path}:{obj.line}: the {obj.shape}'
+        if not in_play[row, slot]:
+          problems[i].append(f'{where} left the workspace while the case settled')
+        elif (abs(obj.pos[2] - half_height(obj.shape, obj.quat)) < ON_TABLE
+              and moved[row, slot] > settle_move):
+          problems[i].append(f'{where}, listed on the table, moved '
+                             f'{100 * moved[row, slot]:.1f} cm while the case settled')
+  return [m for p in problems for m in p]
 
 
 def make_policy(method_source, config):

@@ -75,9 +75,11 @@ def main(argv=None) -> int:
   parser.add_argument('--blocks', nargs='+', default=[], metavar='[SUITE=]TABLE',
                       help='block table for VPG-format (.txt) case files: vpg (default), mvcoba '
                            '(the MV-COBA authors\' block set); SUITE=TABLE for one suite only')
-  parser.add_argument('--allow-overlaps', action='store_true',
-                      help='evaluate cases whose objects interpenetrate as placed (refused '
-                           'otherwise: such a case bursts apart as it settles)')
+  parser.add_argument('--allow-bad-cases', '--allow-overlaps', action='store_true',
+                      help='evaluate cases that fail the load check (refused otherwise): objects '
+                           'that interpenetrate as placed, leave the workspace as the case '
+                           'settles, or move more than 1 cm from where the file puts them on '
+                           'the table')
   args = parser.parse_args(argv)
   if args.runs < 1 or args.max_actions < 1:
     parser.error('--runs and --max-actions must be at least 1')
@@ -104,7 +106,7 @@ def main(argv=None) -> int:
     suites = {name: [read_case(f, *bounds, blocks=tables.get(name, tables.get('', 'vpg')))
                      for f in files]
               for name, files in suite_files(args.suite).items()}
-    overlapping = [m for cases in suites.values() for m in evaluation.case_problems(cases, base)]
+    bad = [m for cases in suites.values() for m in evaluation.case_problems(cases, base)]
     sources = [(config_lib.evaluated(c, args.overrides), model, step)
                for c, model, step in map(load, args.checkpoint)]
     sources += [args.baseline] if args.baseline else []
@@ -113,8 +115,8 @@ def main(argv=None) -> int:
   except (config_lib.ConfigError, ScenarioError, PolicyError) as e:
     print(f'error: {e}', file=sys.stderr)
     return 2
-  if overlapping and not args.allow_overlaps:
-    print('error: ' + '\n  '.join(overlapping) + '\n(--allow-overlaps evaluates them anyway)',
+  if bad and not args.allow_bad_cases:
+    print('error: ' + '\n  '.join(bad) + '\n(--allow-bad-cases evaluates them anyway)',
           file=sys.stderr)
     return 2
   for suite, cases in suites.items():

@@ -1,5 +1,6 @@
 """Evaluation end to end on the tiny preset: cases loaded, run, scored; vmapped == one by one."""
 import json
+import pathlib
 
 import cv2
 import jax
@@ -12,6 +13,7 @@ from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.config import resolve
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts
 from mvcoba_jax.sim.tabletop import Tabletop
+from mvcoba_jax.suites import SUITES_DIR
 
 CASES = {
     'pair.scn': 'cube red 0.05 0.0 0\nflat_box blue -0.1 0.1 30\n',
@@ -87,10 +89,40 @@ def test_overlapping_case_is_refused_before_compiling_naming_both_lines(tmp_path
   args = ['--baseline', 'heuristic', '--suite', str(grid), '--out', str(tmp_path / 'out')]
   assert eval_cli.main(args) == 2
   err = capsys.readouterr().err
-  assert err.startswith('error: ') and f'{grid}:1 and line 2' in err and '--allow-overlaps' in err
+  assert err.startswith('error: ') and f'{grid}:1 and line 2' in err and '--allow-bad-cases' in err
   assert not (tmp_path / 'out').exists()
   assert eval_cli.main(args + ['--blocks', 'lego']) == 2
   assert "unknown block table 'lego'" in capsys.readouterr().err
+
+
+def test_case_that_loses_an_object_while_settling_is_refused_naming_the_line(tmp_path, capsys):
+  """A cube set down over the outer edge of another at the border falls off the table as the
+  case settles: refused before the policy compiles, unless --allow-bad-cases."""
+  case = tmp_path / 'edge.scn'
+  case.write_text('cube red 0.195 0.0 0\ncube blue 0.221 0.0 0 0.0765\ncube green 0.0 0.1 0\n')
+  args = ['--baseline', 'heuristic', '--suite', str(case), '--config', 'tiny', '--runs', '1',
+          '--max-actions', '1', '--out', str(tmp_path / 'out')]
+  assert eval_cli.main(args) == 2
+  err = capsys.readouterr().err
+  assert f'{case}:2: the cube left the workspace while the case settled' in err
+  assert eval_cli.main(args + ['--allow-bad-cases']) == 0
+
+
+def test_load_check_holds_objects_on_the_table_not_those_set_on_the_heap():
+  """In a heap, objects the file sets down on others slide centimetres onto it as it settles;
+  those it puts on the table move millimetres. With a 1 mm bound the check names only the
+  latter (each 'listed on the table'); with its 1 cm bound, none."""
+  case = read_case(SUITES_DIR / 'random' / 'random-05.scn')
+  config = resolve('default')
+  strict = evaluation.case_problems([case], config, settle_move=0.001)
+  on_table = {o.line for o in case.objects if len(_fields(case, o.line)) == 5}
+  named = {int(m.split(':')[1]) for m in strict}
+  assert named and named <= on_table and all('listed on the table, moved' in m for m in strict)
+  assert evaluation.case_problems([case], config) == []
+
+
+def _fields(case, line):
+  return pathlib.Path(case.path).read_text().splitlines()[line - 1].split()
 
 
 def test_eval_cli_writes_tables_visuals_and_videos(setup, tmp_path, capsys):
