@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+from mvcoba_jax import report
+
 # Our method -> the paper's name for it (grasp-only stands for its DRGP).
 PAPER_NAMES = {'mvcoba': 'MV-COBA', 'mvcoba_2fcn': 'MV-COBA-2FCNs', 'vpg': 'VPG',
                'grasp_only': 'DRGP', 'mvp': 'MVP', 'cpg': 'CPG'}
@@ -63,3 +65,15 @@ def comparison(suite: str, ours: dict[str, dict]) -> str:
         cells += ['-', '-' if paper_key not in figures else f'{figures[paper_key]:.1f}']
       lines.append(f'| {name} (not run) | - | ' + ' | '.join(cells) + ' |')
   return '\n'.join(lines)
+
+
+def comparisons(results: dict[str, dict]) -> str:
+  """Markdown of every suite of an evaluation's results.json: `comparison` of its methods' means
+  and intervals over seeds (`report.seed_intervals`) with the paper's figures."""
+  parts = []
+  for suite, rows in results.items():
+    ours = report.seed_intervals(rows, minimum=1)
+    seeds = sorted({entry['seeds'] for entry in ours.values()})
+    parts.append(f'### {suite}: mean [95% CI over {"/".join(map(str, seeds))} seeds] and the '
+                 f'paper\n\n' + comparison(suite, ours))
+  return '\n\n'.join(parts)

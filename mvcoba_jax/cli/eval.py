@@ -27,7 +27,7 @@ import jax
 from tqdm import tqdm
 
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import evaluation, runtime, video, viz
+from mvcoba_jax import evaluation, paper, runtime, video, viz
 from mvcoba_jax import report as report_lib
 from mvcoba_jax.policy import PolicyError, load
 from mvcoba_jax.sim.scenarios import (
@@ -95,7 +95,9 @@ def main(argv=None) -> int:
     if out is None:
       return 2
     print(report_lib.write_report(report, out))
-    print(f'wrote {out / "results.json"} and {out / "results.md"}')
+    (out / 'comparison.md').write_text(paper.comparisons(report) + '\n')
+    print(f'wrote {out / "results.json"}, {out / "results.md"} and {out / "comparison.md"} '
+          '(beside the paper)')
     return 0
   if not args.checkpoint and not args.baseline:
     parser.error('give --checkpoint DIR ..., --baseline heuristic or --tables EVAL_DIR ...')

@@ -20,7 +20,7 @@ import sys
 import time
 
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import methods, paper, report
+from mvcoba_jax import methods, paper
 from mvcoba_jax.checkpoint import holds_checkpoint
 from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.cli import train as train_cli
@@ -71,10 +71,7 @@ def main(argv=None) -> int:
                         '--max-actions', str(args.max_actions), '--out', str(out)])
   if code:
     return code
-  results = json.loads((out / 'results.json').read_text())
-  text = '\n\n'.join(f'### {suite}: mean [95% CI over {len(args.seeds)} seeds] and the paper\n\n'
-                     + paper.comparison(suite, report.seed_intervals(rows, minimum=1))
-                     for suite, rows in results.items())
+  text = paper.comparisons(json.loads((out / 'results.json').read_text()))
   wall = time.perf_counter() - start
   (out / 'comparison.md').write_text(
       f'{text}\n\nExpected wall time {expected / 60:.0f} min, actual {wall / 60:.0f} min.\n')

@@ -219,6 +219,11 @@ def test_tables_join_evaluations_run_apart_and_score_them_again(tmp_path, capsys
   assert '| vpg | 50.0 | - | 50.0 |' in text  # vpg ran no c1: its cell is '-'
   assert '| mvcoba (c) | - | 100.0 | 100.0 |' in text
   assert text in capsys.readouterr().out
+  # Beside the paper: our methods by the paper's names, its figures, its methods we did not run.
+  beside = (tmp_path / 'joined' / 'comparison.md').read_text()
+  assert '### ordered: mean [95% CI over 1/2 seeds] and the paper' in beside
+  assert '| MV-COBA (mvcoba) | 2 |' in beside and '| VPG (vpg) | 1 |' in beside
+  assert '86.3' in beside and '| MVP (not run) | - |' in beside
 
 
 def test_tables_of_results_without_run_counts_fail_naming_the_file(tmp_path, capsys):
