@@ -9,6 +9,7 @@ import pytest
 from mvcoba_jax.config import ConfigError, override, resolve
 from mvcoba_jax.sim import physics
 from mvcoba_jax.sim.primitives import GRASP, PUSH
+from mvcoba_jax.sim.tabletop import Tabletop
 from tests.helpers import actions, layout, make_env, stack
 
 CUBE, CUBE2, FLAT = 0, 1, 2
@@ -55,7 +56,7 @@ def test_concurrent_callers_get_the_results_of_callers_one_at_a_time():
   sim = jax.tree.map(np.asarray, states.sim)
   hold = np.broadcast_to(np.asarray(env._gripper_park), (4, 200, 6))
   parked = ~np.asarray(states.in_play)
-  call = lambda i: env.backend._simulate_host(sim.qpos[i:i + 1], sim.qvel[i:i + 1],
+  call = lambda i: env.backend._simulate_host((), sim.qpos[i:i + 1], sim.qvel[i:i + 1],
                                               sim.mocap_pos[i:i + 1], sim.mocap_quat[i:i + 1],
                                               parked[i:i + 1], hold[i:i + 1])
   alone = [call(i) for i in range(4)]
@@ -65,3 +66,18 @@ def test_concurrent_callers_get_the_results_of_callers_one_at_a_time():
     for x, y in zip(a, b):
       np.testing.assert_array_equal(x, y)
   assert not np.array_equal(alone[0][0], alone[1][0])
+
+
+def test_frames_of_a_primitive_end_where_the_step_ends():
+  """`Tabletop(frames=F)` records F snapshots inside the same physics call: they change during
+  the primitive and the last one holds the objects where the step leaves them."""
+  env = Tabletop(resolve('tiny'), frames=3)
+  assert len(env.frames) == 3 and env.frames[-1] == env.script.length - 1
+  state = jax.jit(env.reset_from_case)(layout(env, [(CUBE, 0.0, 0.0, 0.0)]))
+  action = actions([(PUSH, 0, -0.05, 0.0, 0.05)])  # pushed 10 cm along +x
+  end, info = jax.jit(jax.vmap(env.step))(jax.tree.map(lambda x: x[None], state), action)
+  frames = np.asarray(info.frames[0])
+  assert frames.shape == (3, env.scene.mj_model.nq)
+  cube = np.asarray(env._qpos_idx[CUBE])
+  assert frames[-1][cube[0]] - frames[0][cube[0]] > 0.03  # the cube moves along the frames
+  np.testing.assert_array_equal(frames[-1][cube], np.asarray(end.sim.qpos[0])[cube])
