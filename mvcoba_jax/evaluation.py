@@ -251,7 +251,7 @@ def settled_starts(cases, config, runs: int, seed: int = 0):
   return env, jax.jit(lambda l, k: start(env, l, k)[0])(layouts, keys)
 
 
-SETTLE_MOVE = 0.01  # m an object listed on the table may move while its case settles
+SETTLE_MOVE = 0.01  # m: how far an object listed on the table may move while its case settles
 ON_TABLE = 0.005  # m: listed within this of its resting height, an object is on the table
 
 
