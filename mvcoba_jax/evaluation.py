@@ -262,13 +262,11 @@ def case_problems(cases, config, settle_move: float = SETTLE_MOVE) -> list[str]:
   listed on the table that move more than `settle_move` (objects set down on others settle onto
   the heap). Raises ScenarioError for a case that does not fit the scene (occluder slots)."""
   env = Tabletop(suite_config(config, pool_for(cases)))
-  problems = []
-  for case in cases:
-    case_to_layout(case, env)
-    problems.append(overlaps(case, env))
+  layouts = [case_to_layout(case, env) for case in cases]
+  problems = [overlaps(case, env) for case in cases]
   clean = [i for i, p in enumerate(problems) if not p]
   if clean:
-    layouts = [case_to_layout(cases[i], env) for i in clean]
+    layouts = [layouts[i] for i in clean]
     states = jax.jit(jax.vmap(env.reset_from_case))(stack_layouts(layouts))
     in_play = np.asarray(states.in_play)
     listed = np.stack([np.asarray(layout.pos) for layout in layouts])

@@ -81,7 +81,7 @@ def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir) 
   side, k = perception.grid_size(config), config.env.num_rotations
   views, num_views = networks.views_used(config.network.method), len(config.scene.cameras)
   res, half = config.perception.heightmap_resolution, config.scene.workspace_half
-  fuse, suppress = (getattr(methods.get(config.network.method), f) for f in ('fuse', 'suppress'))
+  spec = methods.get(config.network.method)
   return {
       'format': FORMAT,
       'source': {'workdir': str(pathlib.Path(workdir).resolve()), 'checkpoint_step': step},
@@ -127,12 +127,12 @@ def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir) 
               {'name': 'score', 'shape': [1, 2, k, side, side], 'dtype': 'float32',
                'meaning': 'what the action rule compares: (Q + 0.1) x the suppression factor '
                           'of each action (CPG), no_action where suppressed; Q where nothing '
-                          'is allowed'}] if suppress else []),
+                          'is allowed'}] if spec.suppress else []),
           'in_graph': ['views_used selection'] + (
-              ['fusion of the views into one, the highest point per cell'] if fuse else []) + [
+              ['fusion of the views into one, the highest point per cell'] if spec.fuse else []) + [
                   'rotation of the inputs by -angle(k) for each k (bilinear, zero fill)',
                   'input normalisation', 'the FCNs', 'rotation of the Q maps back by +angle(k)'
-              ] + (['suppression of actions that cannot act (score)'] if suppress else []),
+              ] + (['suppression of actions that cannot act (score)'] if spec.suppress else []),
           'outside_graph': ['the action rule and the argmax (action_rule)',
                             'pixel -> world (pixel_to_world)']},
   }

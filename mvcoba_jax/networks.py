@@ -212,6 +212,7 @@ class QNetwork(nnx.Module):
     spec = methods.get(method)
     self.views = views_used(method)
     self.fuse = spec.fuse
+    self.streams = (0,) if self.fuse else self.views  # the inputs each FCN reads, by view
     self.primitives = tuple(prims for prims, _ in spec.fcns)
     self.fcns = nnx.List([FCN((0,) if self.fuse else views, len(prims), config, rngs)
                           for prims, views in spec.fcns])
@@ -227,13 +228,12 @@ class QNetwork(nnx.Module):
     color, depth = color[:, views], depth[:, views]
     if self.fuse:
       color, depth = fuse_views(color, depth)
-    streams = (0,) if self.fuse else self.views
     x = jnp.concatenate([color, depth[..., None]], axis=-1)  # (B, U, R, R, 4)
     x = jnp.moveaxis(x, 1, -2).reshape(b, 1, side, side, -1)
     x = jnp.broadcast_to(x, (b, k) + x.shape[2:]).reshape((b * k,) + x.shape[2:])
     angle = rotation_angle(rotations.reshape(-1), self.num_rotations)
-    x = _normalise(rotate_images(x, -angle).reshape(b * k, side, side, len(streams), 4))
-    inputs = {v: x[..., i, :] for i, v in enumerate(streams)}
+    x = _normalise(rotate_images(x, -angle).reshape(b * k, side, side, len(self.streams), 4))
+    inputs = {v: x[..., i, :] for i, v in enumerate(self.streams)}
     maps = {}
     for prims, fcn in zip(self.primitives, self.fcns):
       out = rotate_images(fcn(inputs), angle)

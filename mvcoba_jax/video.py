@@ -44,7 +44,7 @@ def world_rays(cam: CameraConfig) -> np.ndarray:
 def project(cam: CameraConfig, point) -> tuple[int, int]:
   """(column, row) of the pixel that shows world `point`."""
   local = camera_frame(cam).T @ (np.asarray(point, float) - cam.pos)
-  focal = 0.5 * cam.height / np.tan(np.deg2rad(cam.fovy_deg) / 2)
+  focal = cameras.focal_length(cam)
   return (int(round(cam.width / 2 + focal * local[0] / -local[2])),
           int(round(cam.height / 2 - focal * local[1] / -local[2])))
 

@@ -26,9 +26,14 @@ class CameraImage:
   hit: jnp.ndarray  # (H, W) bool
 
 
+def focal_length(cam: CameraConfig) -> float:
+  """In pixels, from the vertical field of view."""
+  return 0.5 * cam.height / np.tan(np.deg2rad(cam.fovy_deg) / 2)
+
+
 def pixel_rays(cam: CameraConfig) -> np.ndarray:
   """(H, W, 3) unit ray directions in the camera frame (x right, y up, looking along -z)."""
-  focal = 0.5 * cam.height / np.tan(np.deg2rad(cam.fovy_deg) / 2)
+  focal = focal_length(cam)
   u = (np.arange(cam.width) + 0.5 - cam.width / 2) / focal
   v = (np.arange(cam.height) + 0.5 - cam.height / 2) / focal
   uu, vv = np.meshgrid(u, v)
