@@ -285,13 +285,19 @@ def case_problems(cases, config, settle_move: float = SETTLE_MOVE) -> list[str]:
   return [m for p in problems for m in p]
 
 
+def source_name(method_source) -> str:
+  """The table row of a checkpoint's (config, model, step) or of a baseline's name."""
+  if isinstance(method_source, str):
+    return f'baseline:{method_source}'
+  return method_source[0].network.method
+
+
 def make_policy(method_source, config):
-  """(name, policy factory for an env, views) of a checkpoint or a baseline."""
+  """(policy factory for an env, views) of a checkpoint or a baseline."""
   if isinstance(method_source, str):  # a baseline
-    policy = heuristic_policy(config.env.num_rotations)
-    return f'baseline:{method_source}', policy, (0, 1)
-  config, model, step = method_source
+    return heuristic_policy(config.env.num_rotations), (0, 1)
+  config, model, _ = method_source
   graphdef, params = nnx.split(model)
   method = config.network.method
   q_maps = lambda obs: nnx.merge(graphdef, params)(obs.color, obs.depth)
-  return method, greedy_policy(q_maps, method, config), networks.views_used(method)
+  return greedy_policy(q_maps, method, config), networks.views_used(method)

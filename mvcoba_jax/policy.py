@@ -3,6 +3,7 @@ or from a folder that `mvcoba-export` wrote (model.json, params.npz), which trav
 training state."""
 from __future__ import annotations
 
+import hashlib
 import json
 import pathlib
 import warnings
@@ -34,6 +35,15 @@ def _config(saved: dict, path: pathlib.Path) -> Config:
                   f'defaults: {", ".join(f"{k}={v!r}" for k, v in defaulted.items())} '
                   '(add them to it if its run used other values)', stacklevel=3)
   return config
+
+
+def fingerprint(model: networks.QNetwork) -> str:
+  """A short hash of the network's parameters: tells apart two policies with the same path and
+  step (a run trained again into the same folder)."""
+  digest = hashlib.sha256()
+  for leaf in jax.tree.leaves(nnx.state(model, nnx.Param)):
+    digest.update(np.asarray(leaf).tobytes())
+  return digest.hexdigest()[:16]
 
 
 def load(workdir) -> tuple[Config, networks.QNetwork, int]:

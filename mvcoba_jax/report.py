@@ -127,6 +127,33 @@ def write_report(report: dict, out: pathlib.Path) -> str:
   return text
 
 
+def kept_rows(out: pathlib.Path, settings: dict[tuple[str, str], dict]) -> dict:
+  """The rows of `out`/results.json evaluated with the `settings` of their (suite, row), as a
+  report; empty when there is no such file."""
+  path = out / 'results.json'
+  if not path.exists():
+    return {}
+  try:
+    data = json.loads(path.read_text())
+  except (OSError, json.JSONDecodeError) as e:
+    raise ResultsError(f'{path}: cannot read evaluation results to resume ({e})') from None
+  report = {}
+  for (suite, label), wanted in settings.items():
+    row = data.get(suite, {}).get(label) if isinstance(data, dict) else None
+    if isinstance(row, dict) and row.get('settings') == wanted:
+      report.setdefault(suite, {})[label] = rescored(row, f'{path}: {suite}/{label}')
+  return report
+
+
+def in_order(report: dict, keys) -> dict:
+  """`report` with its suites and rows in the order of the (suite, row) `keys`."""
+  ordered = {}
+  for suite, label in keys:
+    if label in report.get(suite, {}):
+      ordered.setdefault(suite, {})[label] = report[suite][label]
+  return ordered
+
+
 def joined_report(folders: list[str]) -> dict:
   """The results.json of earlier evaluations as one report, scored again from their runs.
 
@@ -143,15 +170,22 @@ def joined_report(folders: list[str]) -> dict:
       raise ResultsError(f'{path}: not the results of mvcoba-eval (suite -> method -> results)')
     for suite, rows in data.items():
       for method, result in rows.items():
-        if not isinstance(result, dict) or 'runs' not in result:
-          raise ResultsError(f'{path}: {suite}/{method} holds no per-run counts (written '
-                              'before mvcoba-eval kept them); evaluate it again')
-        try:
-          by_case = {name: [metrics.RunLog(**log) for log in logs]
-                     for name, logs in result['runs'].items()}
-        except TypeError as e:
-          raise ResultsError(f'{path}: {suite}/{method}: a run log is malformed ({e})') from None
         rows_here = report.setdefault(suite, {})
         label = f'{method} ({pathlib.Path(folder).name})' if method in rows_here else method
-        rows_here[label] = scored(by_case, result.get('wall_s'))
+        rows_here[label] = rescored(result, f'{path}: {suite}/{method}')
   return report
+
+
+def rescored(result, where: str) -> dict:
+  """A row read back from results.json, scored again from its runs (what JSON dropped, such as
+  NaN for an undefined metric, comes back)."""
+  if not isinstance(result, dict) or 'runs' not in result:
+    raise ResultsError(f'{where} holds no per-run counts (written before mvcoba-eval kept '
+                       'them); evaluate it again')
+  try:
+    by_case = {name: [metrics.RunLog(**log) for log in logs]
+               for name, logs in result['runs'].items()}
+  except (TypeError, AttributeError) as e:
+    raise ResultsError(f'{where}: a run log is malformed ({e})') from None
+  return scored(by_case, result.get('wall_s')) | (
+      {'settings': result['settings']} if 'settings' in result else {})

@@ -1,7 +1,7 @@
 """Evaluates trained policies (or a baseline) on test suites and prints the paper's tables.
 
   mvcoba-eval --checkpoint runs/train [runs/vpg ...] [--suite random|ordered|occluded|isolated|vpg|all|PATH ...]
-              [--runs 5] [--max-actions 60] [--out eval_out] [--save-visuals] [--video]
+              [--runs 5] [--max-actions 60] [--out eval_out] [--resume] [--save-visuals] [--video]
   mvcoba-eval --baseline heuristic --suite ordered        # no checkpoint needed
   mvcoba-eval --compare runs/mvcoba runs/vpg ...          # same as several --checkpoint
   mvcoba-eval --tables runs/eval-a runs/eval-b --out X    # one table from earlier --out folders
@@ -9,8 +9,10 @@
 Every (case, run) pair of a suite runs in one jitted, vmapped call (cases padded to a common
 object-slot pool). One table per suite and metric: methods as rows, cases as columns (paper
 Tables 2-4); also written as JSON and Markdown to --out, rewritten as each method finishes, so a
-killed evaluation keeps what it finished. --tables joins the results of evaluations run apart (in
-parallel, or on other machines) into one table, with no compile. With --save-visuals, each run also
+killed evaluation keeps what it finished, and --resume evaluates only what it did not (a row is
+kept when its checkpoint, parameters, cases and settings are the same). --tables joins the
+results of evaluations run apart (in parallel, or on other machines) into one table, with no
+compile. With --save-visuals, each run also
 gets a PNG strip of its heightmaps and actions in --out/visuals/SUITE/METHOD/, beside losses.json:
 every object that left the workspace, the action it left in and where it was when it began.
 With --video, each run gets an MP4 of the scene and the gripper in --out/videos/SUITE/METHOD/.
@@ -29,7 +31,7 @@ from tqdm import tqdm
 from mvcoba_jax import config as config_lib
 from mvcoba_jax import evaluation, paper, runtime, video, viz
 from mvcoba_jax import report as report_lib
-from mvcoba_jax.policy import PolicyError, load
+from mvcoba_jax.policy import PolicyError, fingerprint, load
 from mvcoba_jax.sim.scenarios import (
   ScenarioError,
   case_to_layout,
@@ -67,6 +69,9 @@ def main(argv=None) -> int:
   parser.add_argument('--max-actions', type=int, default=60, help='action cap per run')
   parser.add_argument('--out', default='eval_out', help='folder for JSON and Markdown tables')
   parser.add_argument('--seed', type=int, default=0)
+  parser.add_argument('--resume', action='store_true',
+                      help="keep the rows of --out's results.json evaluated with the same "
+                           'checkpoint, cases and settings; evaluate the rest')
   parser.add_argument('--save-visuals', action='store_true',
                       help='write a PNG strip of heightmaps and actions per run')
   parser.add_argument('--video', action='store_true',
@@ -112,9 +117,18 @@ def main(argv=None) -> int:
     sources = [(config_lib.evaluated(c, args.overrides), model, step)
                for c, model, step in map(load, args.checkpoint)]
     sources += [args.baseline] if args.baseline else []
-    labels = report_lib.row_labels(args.checkpoint, [s[0].network.method for s in sources
-                                                     if not isinstance(s, str)])
-  except (config_lib.ConfigError, ScenarioError, PolicyError) as e:
+    source_names = [evaluation.source_name(s) for s in sources]
+    labels = (report_lib.row_labels(args.checkpoint, source_names[:len(args.checkpoint)])
+              + source_names[len(args.checkpoint):])
+    settings = {(suite, label): {
+        'checkpoint': path, 'step': None if isinstance(source, str) else source[2],
+        'params': None if isinstance(source, str) else fingerprint(source[1]),
+        'cases': [c.name for c in cases], 'runs': args.runs, 'max_actions': args.max_actions,
+        'seed': args.seed, 'set': args.overrides}
+        for suite, cases in suites.items()
+        for label, source, path in zip(labels, sources, args.checkpoint + [None])}
+    report = report_lib.kept_rows(pathlib.Path(args.out), settings) if args.resume else {}
+  except (config_lib.ConfigError, ScenarioError, PolicyError, report_lib.ResultsError) as e:
     print(f'error: {e}', file=sys.stderr)
     return 2
   if bad and not args.allow_bad_cases:
@@ -130,19 +144,20 @@ def main(argv=None) -> int:
   if out is None:
     return 2
   runtime.setup()
-  report = {}
   for suite, cases in suites.items():
     names = [c.name for c in cases]
-    rows = {}
-    for i, source in enumerate(sources):
+    rows = report.setdefault(suite, {})
+    for label, source in zip(labels, sources):
+      if label in rows:
+        print(f'{suite}: {label}: kept from {out / "results.json"}', flush=True)
+        continue
       config = base if isinstance(source, str) else source[0]
       env = Tabletop(evaluation.suite_config(config, evaluation.pool_for(cases)),
                      frames=video.FRAMES_PER_PRIMITIVE if args.video else 0)
-      method, policy, views = evaluation.make_policy(source, env.config)
-      method = labels[i] if i < len(labels) else method
+      policy, views = evaluation.make_policy(source, env.config)
       layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(args.runs)])
       keys = jax.random.split(jax.random.PRNGKey(args.seed), len(cases) * args.runs)
-      print(f'{suite}: {method}, {len(cases)} cases x {args.runs} runs, up to '
+      print(f'{suite}: {label}, {len(cases)} cases x {args.runs} runs, up to '
             f'{args.max_actions} actions each; compiling and running...', flush=True)
       start = time.perf_counter()
       with tqdm(total=args.max_actions, unit='action', desc=f'  {suite}') as bar:
@@ -154,7 +169,7 @@ def main(argv=None) -> int:
             record=args.save_visuals or args.video, progress=progress))(layouts, keys)
         logs = evaluation.run_logs(runs)
       run_names = [f'{n}_run{r}' for n in names for r in range(args.runs)]
-      where = pathlib.Path(pathlib.Path(suite).name) / method.replace(':', '_')
+      where = pathlib.Path(pathlib.Path(suite).name) / label.replace(':', '_')
       if args.video:
         paths = video.write_run_videos(jax.device_get(runs.trace), run_names,
                                        out / 'videos' / where, env)
@@ -170,12 +185,13 @@ def main(argv=None) -> int:
       if uneven:
         print(f'  objects left while these cases settled, so their runs start with different '
               f'numbers in play: {uneven}', flush=True)
-      rows[method] = report_lib.scored(by_case, time.perf_counter() - start)
-      report[suite] = rows
-      report_lib.write_report(report, out)
-      print(f'  done in {rows[method]["wall_s"]:.0f} s', flush=True)
-    for text in report_lib.suite_tables(suite, rows):
+      rows[label] = report_lib.scored(by_case, time.perf_counter() - start) | {
+          'settings': settings[suite, label]}
+      report_lib.write_report(report_lib.in_order(report, settings), out)
+      print(f'  done in {rows[label]["wall_s"]:.0f} s', flush=True)
+    for text in report_lib.suite_tables(suite, report_lib.in_order(report, settings)[suite]):
       print('\n' + text)
+  report_lib.write_report(report_lib.in_order(report, settings), out)
   print(f'\nwrote {out / "results.json"} and {out / "results.md"}')
   return 0
 

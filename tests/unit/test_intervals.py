@@ -55,3 +55,29 @@ def test_uneven_starts_name_the_cases_whose_runs_began_differently():
                                picked=4, lost=0, completed=False)
   assert report.uneven_starts({'a': [log(6), log(6)], 'b': [log(31), log(32)]}) == 'b (31, 32)'
   assert report.uneven_starts({'a': [log(6), log(6)]}) == ''
+
+
+def test_resumed_evaluation_keeps_only_rows_with_the_same_settings(tmp_path):
+  import dataclasses
+  import json
+
+  from mvcoba_jax.metrics import RunLog
+  runs = {'a': [dataclasses.asdict(RunLog(actions=4, grasp_attempts=3, grasp_successes=0,
+                                          objects=2, picked=0, lost=0, completed=False))]}
+  settings = {'checkpoint': 'runs/x', 'step': 8, 'params': 'ab12', 'cases': ['a'], 'runs': 1,
+              'max_actions': 4, 'seed': 0, 'set': []}
+  row = {'runs': runs, 'wall_s': 9.0, 'settings': settings}
+  written = {'random': {'mvcoba': row, 'vpg': row | {'settings': settings | {'step': 16}}},
+             'ordered': {'mvcoba': {'runs': runs, 'wall_s': 3.0}}}  # written before settings
+  (tmp_path / 'results.json').write_text(json.dumps(written))
+  wanted = {(s, m): settings for s in ('ordered', 'random') for m in ('vpg', 'mvcoba')}
+  kept = report.kept_rows(tmp_path, wanted)
+  assert list(kept) == ['random'] and list(kept['random']) == ['mvcoba']
+  mean = kept['random']['mvcoba']['mean']  # scored again: no grasp succeeded, none undefined
+  assert mean['grasp_success'] == 0.0 and kept['random']['mvcoba']['settings'] == settings
+  assert list(report.in_order({'random': {'vpg': 1, 'mvcoba': 2}, 'ordered': {'vpg': 3}},
+                              wanted)) == ['ordered', 'random']
+  assert report.kept_rows(tmp_path / 'none', wanted) == {}
+  (tmp_path / 'results.json').write_text('{')
+  with pytest.raises(report.ResultsError, match='results.json: cannot read'):
+    report.kept_rows(tmp_path, wanted)
