@@ -65,6 +65,21 @@ def test_vmapped_evaluation_equals_cases_one_by_one(setup):
       assert (np.asarray(a) == np.asarray(b)[i]).all()
 
 
+def test_a_run_that_finished_early_leaves_the_others_as_they_were_alone(setup, tmp_path):
+  """A finished run steps on with its table emptied (cheaper); the batch's other runs do not
+  notice."""
+  folder, env, run, layouts, keys, _ = setup
+  (tmp_path / 'one.scn').write_text('cube red 0.05 0.0 0\n')
+  one = case_to_layout(read_case(tmp_path / 'one.scn'), env)
+  three = jax.tree.map(lambda x: x[1], layouts)
+  together = run(stack_layouts([one, three]), keys)
+  alone = run(jax.tree.map(lambda x: jnp.stack([x] * 2), three), jnp.stack([keys[1]] * 2))
+  first, second = evaluation.run_logs(together)
+  assert first.completed and first.actions < second.actions == MAX_ACTIONS
+  for a, b in zip(jax.tree.leaves(alone), jax.tree.leaves(together)):
+    assert (np.asarray(a)[1] == np.asarray(b)[1]).all()
+
+
 def test_suite_pool_smaller_than_the_training_drops_is_fine():
   config = evaluation.suite_config(resolve('default'), (('cube', 2),))
   assert Tabletop(config).num_slots == 2 and config.env.num_objects == 2

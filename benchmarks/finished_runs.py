@@ -1,0 +1,98 @@
+"""What a finished evaluation run costs the batch it waits in, per suite.
+
+`mvcoba-eval` steps every (case, run) pair of a suite in lockstep until the last run finishes, so
+finished runs keep stepping; they step on an emptied table (`Tabletop.emptied`). This times one
+lockstep action (the heuristic's primitive, then both cameras) of a batch holding every case of
+a suite once, settled as the evaluation starts them, against the same batch emptied, on the
+native backend; and, from an evaluation's results.json, how many of the lockstep steps were
+taken by runs that had already finished. Prints one JSON object.
+
+  python benchmarks/finished_runs.py [--suite random ordered occluded] [--repeats 3]
+                                     [--results docs/results/six-methods/results.json]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import statistics
+import sys
+import time
+
+import jax
+import jax.numpy as jnp
+from physics import settings  # noqa: E402
+
+from mvcoba_jax import evaluation, runtime, task  # noqa: E402
+from mvcoba_jax.config import resolve  # noqa: E402
+from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
+from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
+from mvcoba_jax.suites import suite_files  # noqa: E402
+
+
+def step_cost(suite: str, repeats: int) -> dict:
+  cases = [read_case(f) for f in suite_files([suite])[suite]]
+  config = resolve(None)
+  env = Tabletop(evaluation.suite_config(config, evaluation.pool_for(cases)))
+  n = len(cases)
+  layouts = stack_layouts([case_to_layout(c, env) for c in cases])
+  states, _ = jax.jit(lambda l, k: evaluation.start(env, l, k))(
+      layouts, jax.random.split(jax.random.PRNGKey(0), n))
+  policy = evaluation.heuristic_policy(config.env.num_rotations)
+
+  @jax.jit
+  def action(states, key):
+    obs = task.observe(env, states)
+    chosen = policy(obs, jnp.ones(n, bool), jax.random.split(key, n))
+    return task.step(env, (0, 1), states, obs, jnp.zeros(n, jnp.int32), chosen)
+
+  emptied = jax.jit(jax.vmap(env.emptied))(states)
+  times = {'full': [], 'emptied': []}
+  jax.block_until_ready(action(states, jax.random.PRNGKey(0)))  # compile
+  for r in range(repeats):  # interleaved, so drifting load hits both alike
+    for name, batch in (('full', states), ('emptied', emptied)):
+      t = time.perf_counter()
+      jax.block_until_ready(action(batch, jax.random.PRNGKey(r)))
+      times[name].append(time.perf_counter() - t)
+  full, empty = statistics.median(times['full']), statistics.median(times['emptied'])
+  return {'suite': suite, 'batch': n, 'objects_in_play': int(states.in_play.sum()),
+          'full_action_s': full, 'emptied_action_s': empty, 'emptied_over_full': empty / full}
+
+
+def idle_share(results: str) -> dict:
+  """Per suite, the share of lockstep steps taken by runs that had finished (each policy's
+  batch steps until its longest run ends)."""
+  report = json.loads(pathlib.Path(results).read_text())
+  share = {}
+  for suite, rows in report.items():
+    used = steps = 0
+    for row in rows.values():
+      actions = [log['actions'] for logs in row['runs'].values() for log in logs]
+      used, steps = used + sum(actions), steps + len(actions) * max(actions)
+    share[suite] = 1.0 - used / steps
+  return share
+
+
+def main():
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument('--suite', nargs='+', default=['random', 'ordered', 'occluded'])
+  parser.add_argument('--repeats', type=int, default=3)
+  parser.add_argument('--results', default='docs/results/six-methods/results.json',
+                      help="an evaluation's results.json, for the share of finished runs' steps")
+  args = parser.parse_args()
+  runtime.setup()
+  rows = [step_cost(s, args.repeats) for s in args.suite]
+  idle = idle_share(args.results)
+  for row in rows:
+    share = idle.get(row['suite'])
+    row['finished_share_of_steps'] = share
+    if share is not None:  # the evaluation's time with finished runs emptied, over kept as they were
+      row['expected_eval_time_ratio'] = 1.0 - share * (1.0 - row['emptied_over_full'])
+  json.dump({'benchmark': 'finished_runs', 'settings': settings() | {
+      'repeats': args.repeats, 'results': args.results, 'policy': 'heuristic'},
+      'results': rows}, sys.stdout, indent=1)
+  print()
+
+
+if __name__ == '__main__':
+  main()
