@@ -1,14 +1,18 @@
-"""What a finished evaluation run costs the batch it waits in, per suite.
+"""What finished evaluation runs cost the batch they wait in, per suite.
 
-`mvcoba-eval` steps every (case, run) pair of a suite in lockstep until the last run finishes, so
-finished runs keep stepping; they step on an emptied table (`Tabletop.emptied`). This times one
-lockstep action (the heuristic's primitive, then both cameras) of a batch holding every case of
-a suite once, settled as the evaluation starts them, against the same batch emptied, on the
-native backend; and, from an evaluation's results.json, how many of the lockstep steps were
-taken by runs that had already finished. Prints one JSON object.
+`mvcoba-eval` steps every (case, run) pair of a suite in lockstep, so finished runs keep
+stepping until the batch moves the runs still going to a smaller one (`evaluation.evaluate`);
+meanwhile they step on an emptied table (`Tabletop.emptied`). This times one lockstep action (the
+heuristic's primitive, then both cameras) of a batch holding every case of a suite once, settled
+as the evaluation starts them, against the same batch emptied, on the native backend; reads
+from an evaluation's results.json how many of the lockstep steps were taken by runs that had
+already finished; and with --checkpoint, times the whole evaluation of the suite (--runs per case)
+in one batch throughout against the same with the runs moving to smaller batches, and says
+whether their counters agree. Prints one JSON object.
 
   python benchmarks/finished_runs.py [--suite random ordered occluded] [--repeats 3]
                                      [--results docs/results/six-methods/results.json]
+                                     [--checkpoint runs/train --runs 5]
 """
 from __future__ import annotations
 
@@ -25,6 +29,7 @@ from physics import settings  # noqa: E402
 
 from mvcoba_jax import evaluation, runtime, task  # noqa: E402
 from mvcoba_jax.config import resolve  # noqa: E402
+from mvcoba_jax.policy import load  # noqa: E402
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
 from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 from mvcoba_jax.suites import suite_files  # noqa: E402
@@ -59,6 +64,27 @@ def step_cost(suite: str, repeats: int) -> dict:
           'full_action_s': full, 'emptied_action_s': empty, 'emptied_over_full': empty / full}
 
 
+def whole_suite(suite: str, checkpoint: str, runs: int) -> dict:
+  """Wall time of a suite's evaluation kept in one batch, and moving to smaller batches."""
+  cases = [read_case(f) for f in suite_files([suite])[suite]]
+  source = load(checkpoint)
+  env = Tabletop(evaluation.suite_config(source[0], evaluation.pool_for(cases)))
+  policy, views = evaluation.make_policy(source, env.config)
+  layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
+  keys = jax.random.split(jax.random.PRNGKey(0), len(cases) * runs)
+  n = len(cases) * runs
+  row = {'suite': suite, 'checkpoint': checkpoint, 'runs': n}
+  logs = {}
+  for name, smallest in (('one_batch', n), ('smaller_batches', 8)):
+    t = time.perf_counter()
+    logs[name] = evaluation.run_logs(evaluation.evaluate(env, policy, views, layouts, keys, 60,
+                                                         smallest=smallest))
+    row[f'{name}_s'] = time.perf_counter() - t  # compiles included: each batch size compiles
+  row['smaller_over_one'] = row['smaller_batches_s'] / row['one_batch_s']
+  row['runs_that_differ'] = sum(a != b for a, b in zip(logs['one_batch'], logs['smaller_batches']))
+  return row
+
+
 def idle_share(results: str) -> dict:
   """Per suite, the share of lockstep steps taken by runs that had finished (each policy's
   batch steps until its longest run ends)."""
@@ -79,8 +105,11 @@ def main():
   parser.add_argument('--repeats', type=int, default=3)
   parser.add_argument('--results', default='docs/results/six-methods/results.json',
                       help="an evaluation's results.json, for the share of finished runs' steps")
+  parser.add_argument('--checkpoint', help='a policy to time whole evaluations with')
+  parser.add_argument('--runs', type=int, default=5, help='runs per case of those evaluations')
   args = parser.parse_args()
   runtime.setup()
+  whole = [whole_suite(s, args.checkpoint, args.runs) for s in args.suite] if args.checkpoint else []
   rows = [step_cost(s, args.repeats) for s in args.suite]
   idle = idle_share(args.results)
   for row in rows:
@@ -90,7 +119,7 @@ def main():
       row['expected_eval_time_ratio'] = 1.0 - share * (1.0 - row['emptied_over_full'])
   json.dump({'benchmark': 'finished_runs', 'settings': settings() | {
       'repeats': args.repeats, 'results': args.results, 'policy': 'heuristic'},
-      'results': rows}, sys.stdout, indent=1)
+      'results': rows, 'whole_suites': whole}, sys.stdout, indent=1)
   print()
 
 

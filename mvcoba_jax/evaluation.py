@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import collections
 import dataclasses
+import functools
 from typing import Callable
 
 import jax
@@ -29,7 +30,7 @@ from mvcoba_jax.sim.scenarios import (
   overlaps,
   stack_layouts,
 )
-from mvcoba_jax.sim.tabletop import Layout, Tabletop, where_envs
+from mvcoba_jax.sim.tabletop import EnvState, Layout, Tabletop, where_envs
 
 POSITION_NOISE = 0.002  # m, per axis, on each object's start position
 YAW_NOISE = 0.035  # rad (2 deg)
@@ -94,16 +95,21 @@ def start(env: Tabletop, layouts: Layout, keys):
   return jax.vmap(env.reset_from_case)(jax.vmap(jitter)(layouts, k_start), k_start), k_loop
 
 
-def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Layout, keys,
-             max_actions: int, record: bool = False,
-             progress: Callable[[jnp.ndarray, jnp.ndarray], None] | None = None) -> Runs:
-  """Runs the greedy `policy` from each layout (N,) with its key (N,); returns the counters.
+@struct.dataclass
+class Batch:
+  """The evaluation loop's carry: the runs in the batch (B,) and the lockstep action count."""
+  states: EnvState
+  obs: perception.Observation
+  changed: jnp.ndarray  # (B,) the last action changed the scene
+  runs: Runs
+  keys: jnp.ndarray  # (B, 2)
+  t: jnp.ndarray  # int32: lockstep actions taken
 
-  With `record`, `Runs.trace` holds every step's heightmaps and action (memory grows with
-  N x max_actions x views x R^2 x 3 bytes). `progress(actions_done, runs_finished)` is called
-  on the host after every lockstep action, from inside the compiled loop: one call of a large
-  suite can take an hour on a CPU.
-  """
+
+@functools.partial(jax.jit, static_argnames=('env', 'views', 'max_actions', 'record'))
+def begin(env: Tabletop, views: tuple[int, ...], layouts: Layout, keys, max_actions: int,
+          record: bool) -> Batch:
+  """Every run settled at its start, counters at zero (and an empty trace with `record`)."""
   states, k_loop = start(env, layouts, keys)
   obs = task.observe(env, states)
   n = layouts.in_play.shape[0]
@@ -111,31 +117,39 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
   runs = Runs(actions=zeros, grasp_attempts=zeros, grasp_successes=zeros, picked=zeros,
               lost=zeros, objects=jnp.sum(states.in_play, axis=1, dtype=jnp.int32),
               failures=zeros, finished=jnp.zeros(n, bool), completed=jnp.zeros(n, bool))
-
-  def snapshot(obs, states, action: agent.PixelAction, info, active) -> Trace:
-    """One step of every run (N, ...), as the trace keeps it."""
-    return Trace(color=perception.color_to_uint8(obs.color),
-                 object_xyz=jax.vmap(env.object_positions)(states),
-                 left_workspace=info.left_workspace, primitive=action.primitive,
-                 rotation=action.rotation, row=action.row, col=action.col,
-                 grasp_success=info.grasp_success, active=active, frames=info.frames,
-                 slot_color=perception.color_to_uint8(states.color),
-                 mocap_pos=states.sim.mocap_pos, mocap_quat=states.sim.mocap_quat)
-
   if record:
+    nothing = agent.PixelAction(zeros, zeros, zeros, zeros)
     shapes = jax.eval_shape(lambda s, a: jax.vmap(env.step)(s, a)[1], states,
-                            agent.to_world(agent.PixelAction(zeros, zeros, zeros, zeros),
-                                           obs.depth, views, env.config))
-    step = snapshot(obs, states, agent.PixelAction(zeros, zeros, zeros, zeros),
-                    jax.tree.map(lambda x: jnp.zeros(x.shape, x.dtype), shapes), runs.finished)
+                            agent.to_world(nothing, obs.depth, views, env.config))
+    step = _snapshot(env, obs, states, nothing,
+                     jax.tree.map(lambda x: jnp.zeros(x.shape, x.dtype), shapes), runs.finished)
     runs = runs.replace(trace=jax.tree.map(
         lambda x: jnp.zeros((n, max_actions) + x.shape[1:], x.dtype), step))
-  carry = (states, obs, jnp.ones(n, bool), runs, k_loop, jnp.int32(0))
+  return Batch(states=states, obs=obs, changed=jnp.ones(n, bool), runs=runs, keys=k_loop,
+               t=jnp.int32(0))
 
-  def body(carry):
-    states, obs, changed, runs, keys, t = carry
-    keys, k_act = jax.vmap(jax.random.split, out_axes=1)(keys)
-    action = policy(obs, changed, k_act)
+
+def _snapshot(env, obs, states, action: agent.PixelAction, info, active) -> Trace:
+  """One step of every run (B, ...), as the trace keeps it."""
+  return Trace(color=perception.color_to_uint8(obs.color),
+               object_xyz=jax.vmap(env.object_positions)(states),
+               left_workspace=info.left_workspace, primitive=action.primitive,
+               rotation=action.rotation, row=action.row, col=action.col,
+               grasp_success=info.grasp_success, active=active, frames=info.frames,
+               slot_color=perception.color_to_uint8(states.color),
+               mocap_pos=states.sim.mocap_pos, mocap_quat=states.sim.mocap_quat)
+
+
+@functools.partial(jax.jit, static_argnames=('env', 'policy', 'views', 'max_actions', 'record',
+                                             'progress'))
+def advance(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch, max_actions: int,
+            record: bool, progress, until, retired) -> Batch:
+  """Lockstep actions until every run of the batch has finished, the action cap, or no more than
+  `until` runs still going; `retired`: the finished runs outside this batch (for `progress`)."""
+  def body(batch: Batch) -> Batch:
+    states, obs, runs = batch.states, batch.obs, batch.runs
+    keys, k_act = jax.vmap(jax.random.split, out_axes=1)(batch.keys)
+    action = policy(obs, batch.changed, k_act)
     next_states, next_obs, out = task.step(env, views, states, obs, runs.failures, action)
     info = out.info
     active = ~runs.finished
@@ -149,20 +163,55 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
         finished=runs.finished | out.done,
         completed=runs.completed | (active & out.cleared & (picked == runs.objects)))
     if record:
-      runs = runs.replace(trace=jax.tree.map(lambda buf, x: buf.at[:, t].set(x), runs.trace,
-                                             snapshot(obs, states, action, info, active)))
+      runs = runs.replace(trace=jax.tree.map(
+          lambda buf, x: buf.at[:, batch.t].set(x), runs.trace,
+          _snapshot(env, obs, states, action, info, active)))
     if progress is not None:
-      jax.debug.callback(progress, t + 1, jnp.sum(runs.finished))
+      jax.debug.callback(progress, batch.t + 1, retired + jnp.sum(runs.finished))
     # A finished run steps on with its table emptied, so the batch waits for the others at
     # a fraction of the cost; nothing it does is counted.
     next_states = where_envs(runs.finished, jax.vmap(env.emptied)(next_states), next_states)
-    return (next_states, where_envs(active, next_obs, obs),
-            jnp.where(active, out.changed, changed), runs, keys, t + 1)
+    return Batch(states=next_states, obs=where_envs(active, next_obs, obs),
+                 changed=jnp.where(active, out.changed, batch.changed), runs=runs, keys=keys,
+                 t=batch.t + 1)
 
-  def cond(carry):
-    return jnp.any(~carry[3].finished) & (carry[5] < max_actions)
+  def going(batch: Batch):
+    still = jnp.sum(~batch.runs.finished)
+    return (still > 0) & (still > until) & (batch.t < max_actions)
 
-  return jax.lax.while_loop(cond, body, carry)[3]
+  return jax.lax.while_loop(going, body, batch)
+
+
+def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Layout, keys,
+             max_actions: int, record: bool = False,
+             progress: Callable[[jnp.ndarray, jnp.ndarray], None] | None = None,
+             smallest: int = 8) -> Runs:
+  """Runs the greedy `policy` from each layout (N,) with its key (N,); returns the counters.
+
+  The runs step in lockstep in one compiled loop. Once no more than half of the batch is still
+  going, those runs go on in a batch half the size (padded with finished runs), down to
+  `smallest`: finished runs would otherwise cost the network and the cameras as much as live
+  ones. A run's actions depend only on its own layout and key, but the network rounds
+  differently at each batch size, so a knife-edge choice can differ from a run in another
+  batch. With `record`, `Runs.trace` holds every step's heightmaps and action (memory grows
+  with N x max_actions x views x R^2 x 3 bytes). `progress(actions_done, runs_finished)` is
+  called on the host after every lockstep action: a large suite can take an hour on a CPU.
+  """
+  batch = begin(env, views, layouts, keys, max_actions, record)
+  n = layouts.in_play.shape[0]
+  size, members, runs = n, jnp.arange(n), batch.runs
+  while True:
+    until = size // 2 if size // 2 >= smallest else -1
+    batch = advance(env, policy, views, batch, max_actions, record, progress, until, n - size)
+    runs = jax.tree.map(lambda whole, part: whole.at[members].set(part), runs, batch.runs)
+    going = int(jnp.sum(~batch.runs.finished))
+    if not going or int(batch.t) >= max_actions:
+      return runs
+    while size // 2 >= max(going, smallest):
+      size //= 2
+    keep = jnp.argsort(batch.runs.finished, stable=True)[:size]  # every run still going first
+    members = members[keep]
+    batch = jax.tree.map(lambda x: x[keep] if jnp.ndim(x) else x, batch)
 
 
 def run_logs(runs: Runs) -> list[RunLog]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from mvcoba_jax import report
+from mvcoba_jax import intervals, report
 
 # Our method -> the paper's name for it (grasp-only stands for its DRGP).
 PAPER_NAMES = {'mvcoba': 'MV-COBA', 'mvcoba_2fcn': 'MV-COBA-2FCNs', 'vpg': 'VPG',
@@ -67,13 +67,36 @@ def comparison(suite: str, ours: dict[str, dict]) -> str:
   return '\n'.join(lines)
 
 
+def separations(ours: dict[str, dict]) -> str:
+  """Markdown: per metric, which methods beat which in a suite, the only claims we make: their
+  intervals over seeds are disjoint (`intervals.separated`). Pairs not named are not
+  distinguishable at this sample size."""
+  lines = []
+  for key, label in (('grasp_success', 'grasp success'), ('completion', 'completion'),
+                     ('objects_picked', 'objects picked')):
+    scored = sorted(((e[key], m) for m, e in ours.items() if e.get(key) is not None),
+                    key=lambda pair: -pair[0][0])
+    beats = []
+    for i, (high, method) in enumerate(scored):
+      below = [PAPER_NAMES.get(m, m) for low, m in scored[i + 1:]
+               if intervals.separated(high, low)]
+      if below:
+        beats.append(f'{PAPER_NAMES.get(method, method)} > {", ".join(below)}')
+    lines.append(f'- {label}: ' + ('; '.join(beats) if beats else
+                                   'no two methods distinguishable'))
+  return '\n'.join(lines)
+
+
 def comparisons(results: dict[str, dict]) -> str:
   """Markdown of every suite of an evaluation's results.json: `comparison` of its methods' means
-  and intervals over seeds (`report.seed_intervals`) with the paper's figures."""
+  and intervals over seeds (`report.seed_intervals`) with the paper's figures, and the
+  `separations` those intervals allow."""
   parts = []
   for suite, rows in results.items():
     ours = report.seed_intervals(rows, minimum=1)
     seeds = sorted({entry['seeds'] for entry in ours.values()})
     parts.append(f'### {suite}: mean [95% CI over {"/".join(map(str, seeds))} seeds] and the '
-                 f'paper\n\n' + comparison(suite, ours))
+                 f'paper\n\n' + comparison(suite, ours)
+                 + '\n\nWhere our intervals separate (A > B: disjoint, A higher):\n\n'
+                 + separations(ours))
   return '\n\n'.join(parts)

@@ -6,16 +6,16 @@
   mvcoba-eval --compare runs/mvcoba runs/vpg ...          # same as several --checkpoint
   mvcoba-eval --tables runs/eval-a runs/eval-b --out X    # one table from earlier --out folders
 
-Every (case, run) pair of a suite runs in one jitted, vmapped call (cases padded to a common
-object-slot pool). One table per suite and metric: methods as rows, cases as columns (paper
-Tables 2-4); also written as JSON and Markdown to --out, rewritten as each method finishes, so a
-killed evaluation keeps what it finished, and --resume evaluates only what it did not (a row is
-kept when its checkpoint, parameters, cases and settings are the same). --tables joins the
-results of evaluations run apart (in parallel, or on other machines) into one table, with no
-compile. With --save-visuals, each run also
-gets a PNG strip of its heightmaps and actions in --out/visuals/SUITE/METHOD/, beside losses.json:
-every object that left the workspace, the action it left in and where it was when it began.
-With --video, each run gets an MP4 of the scene and the gripper in --out/videos/SUITE/METHOD/.
+Every (case, run) pair of a suite runs in lockstep in one compiled loop (cases padded to a
+common object-slot pool; the runs still going move to smaller batches as others finish). One
+table per suite and metric: methods as rows, cases as columns (paper Tables 2-4); also written as
+JSON and Markdown to --out, rewritten as each method finishes, so a killed evaluation keeps what
+it finished, and --resume evaluates only what it did not (a row is kept when its checkpoint,
+parameters, cases and settings are the same). --tables joins the results of evaluations run
+apart (in parallel, or on other machines) into one table, with no compile. With
+--save-visuals, each run also gets a PNG strip of its heightmaps and actions in
+--out/visuals/SUITE/METHOD/, beside losses.json: every object that left the workspace, the action
+it left in and where it was when it began. With --video, each run gets an MP4 of the scene and the gripper in --out/videos/SUITE/METHOD/.
 """
 from __future__ import annotations
 
@@ -164,9 +164,8 @@ def main(argv=None) -> int:
         def progress(done, finished, bar=bar, n=len(layouts.in_play)):
           bar.set_postfix_str(f'{int(finished)}/{n} runs finished', refresh=False)
           bar.update(int(done) - bar.n)
-        runs = jax.jit(lambda l, k: evaluation.evaluate(
-            env, policy, views, l, k, args.max_actions,
-            record=args.save_visuals or args.video, progress=progress))(layouts, keys)
+        runs = evaluation.evaluate(env, policy, views, layouts, keys, args.max_actions,
+                                   record=args.save_visuals or args.video, progress=progress)
         logs = evaluation.run_logs(runs)
       run_names = [f'{n}_run{r}' for n in names for r in range(args.runs)]
       where = pathlib.Path(pathlib.Path(suite).name) / label.replace(':', '_')

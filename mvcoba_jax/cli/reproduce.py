@@ -9,7 +9,8 @@ seeds beside the paper's figures.
 
 A killed reproduction resumes where it stopped: training from each run's latest checkpoint,
 evaluation keeping every (suite, policy) row it finished. Writes the evaluation's results.json and
-results.md and comparison.md (ours beside the paper's, per suite) to --out, and prints the
+results.md and comparison.md (ours beside the paper's, per suite) and the sweep's training
+curves (mean over seeds with a band, one PNG per metric) to --out, and prints the
 expected and the actual time (summed over invocations from the runs' logs).
 """
 from __future__ import annotations
@@ -17,6 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
+import shutil
 import sys
 import time
 
@@ -93,7 +95,9 @@ def main(argv=None) -> int:
             f'({train_s / 60:.0f} training, {eval_s / 60:.0f} evaluating: the sums of the '
             f'runs\' logged times, over every invocation); this invocation {wall / 60:.0f} min.')
   (out / 'comparison.md').write_text(f'{text}\n\n{timing}\n')
-  print(f'\n{text}\n\n{timing}\nwrote {out / "comparison.md"}')
+  curves = [shutil.copy(path, out) for path in sorted(workdir.glob('curves-*.png'))]
+  print(f'\n{text}\n\n{timing}\nwrote {out / "comparison.md"} and the sweep\'s training curves '
+        f'({", ".join(pathlib.Path(c).name for c in curves)})')
   return 0
 
 

@@ -31,7 +31,7 @@ def setup(tmp_path_factory):
   cases = [read_case(folder / name) for name in CASES]
   env = Tabletop(evaluation.suite_config(config, evaluation.pool_for(cases)))
   policy = evaluation.heuristic_policy(config.env.num_rotations)
-  run = jax.jit(lambda l, k: evaluation.evaluate(env, policy, (0, 1), l, k, MAX_ACTIONS))
+  run = lambda l, k: evaluation.evaluate(env, policy, (0, 1), l, k, MAX_ACTIONS)
   layouts = stack_layouts([case_to_layout(c, env) for c in cases])
   keys = jax.random.split(jax.random.PRNGKey(0), len(cases))
   return folder, env, run, layouts, keys, run(layouts, keys)
@@ -78,6 +78,30 @@ def test_a_run_that_finished_early_leaves_the_others_as_they_were_alone(setup, t
   assert first.completed and first.actions < second.actions == MAX_ACTIONS
   for a, b in zip(jax.tree.leaves(alone), jax.tree.leaves(together)):
     assert (np.asarray(a)[1] == np.asarray(b)[1]).all()
+
+
+def test_runs_moved_to_a_smaller_batch_end_as_in_the_whole_batch(setup, tmp_path):
+  """Two of four runs finish early; the runs still going move to a batch of two. With
+  the heuristic (no network, nothing that rounds by batch size) every counter and every counted
+  step of the trace is what the whole batch gives."""
+  folder, env, _, layouts, _, _ = setup
+  (tmp_path / 'one.scn').write_text('cube red 0.05 0.0 0\n')
+  one = case_to_layout(read_case(tmp_path / 'one.scn'), env)
+  three = jax.tree.map(lambda x: x[1], layouts)
+  four = stack_layouts([one, one, one, three])
+  keys = jax.random.split(jax.random.PRNGKey(3), 4)
+  policy = evaluation.heuristic_policy(env.config.env.num_rotations)
+  run = lambda smallest: evaluation.evaluate(env, policy, (0, 1), four, keys, MAX_ACTIONS,
+                                             record=True, smallest=smallest)
+  whole, moved = run(smallest=4), run(smallest=1)
+  assert sum(r.actions < MAX_ACTIONS for r in evaluation.run_logs(moved)) >= 2
+  for a, b in zip(jax.tree.leaves(whole.replace(trace=None)),
+                  jax.tree.leaves(moved.replace(trace=None))):
+    assert (np.asarray(a) == np.asarray(b)).all()
+  active = np.asarray(whole.trace.active)  # what a finished run did after is not kept
+  assert (active == np.asarray(moved.trace.active)).all()
+  for a, b in zip(jax.tree.leaves(whole.trace), jax.tree.leaves(moved.trace)):
+    assert (np.asarray(a)[active] == np.asarray(b)[active]).all()
 
 
 def test_suite_pool_smaller_than_the_training_drops_is_fine():

@@ -250,6 +250,7 @@ def test_reproduction_trains_evaluates_and_sets_ours_beside_the_paper(tmp_path, 
   assert '### occluded: mean [95% CI over 2 seeds] and the paper' in text
   assert '| DRGP (grasp_only) | 2 |' in text and '| MV-COBA (not run) | - |' in text and '97.8' in text
   assert 'Expected wall time' in text and 'expected about' in capsys.readouterr().out
+  assert (out / 'curves-grasp_success.png').is_file()
   # Started again it trains and evaluates nothing anew: every run is at its last action and
   # every row of the evaluation is kept.
   results = json.loads((out / 'results.json').read_text())

@@ -81,3 +81,13 @@ def test_resumed_evaluation_keeps_only_rows_with_the_same_settings(tmp_path):
   (tmp_path / 'results.json').write_text('{')
   with pytest.raises(report.ResultsError, match='results.json: cannot read'):
     report.kept_rows(tmp_path, wanted)
+
+
+def test_separations_name_only_the_pairs_whose_intervals_are_disjoint():
+  from mvcoba_jax import paper
+  ours = {'mvcoba': {'grasp_success': (80.0, 75.0, 85.0), 'completion': (50.0, 20.0, 80.0)},
+          'vpg': {'grasp_success': (60.0, 55.0, 65.0), 'completion': (40.0, 10.0, 70.0)},
+          'grasp_only': {'grasp_success': (70.0, 62.0, 78.0), 'completion': None}}
+  text = paper.separations(ours)
+  assert '- grasp success: MV-COBA > VPG\n' in text  # DRGP's interval overlaps both
+  assert '- completion: no two methods distinguishable' in text
