@@ -96,6 +96,9 @@ def main(argv=None) -> int:
   for i, (workdir, config) in enumerate(runs.items()):
     if sweep:
       print(f'sweep {i + 1}/{len(runs)}: {workdir}', flush=True)
+      if args.resume and finished(workdir, config):
+        print('  finished already: its last checkpoint, config and greedy evaluation are there')
+        continue
     code = train(args, config, workdir, args.resume and (holds_checkpoint(workdir) or not sweep))
     if code:
       return code
@@ -104,6 +107,20 @@ def main(argv=None) -> int:
     for path in plot_sweep(list(runs), window, pathlib.Path(args.workdir)):
       print(f'sweep curves: {path}')
   return 0
+
+
+def finished(workdir: pathlib.Path, config) -> bool:
+  """Whether a run of a sweep has nothing left to do: trained to the end with this very config
+  and evaluated (a resumed sweep passes over it without compiling)."""
+  folder = workdir / 'checkpoints'
+  steps = [int(p.name) for p in folder.iterdir() if p.name.isdigit()] if folder.is_dir() else []
+  try:
+    saved = json.loads((workdir / 'config.json').read_text())
+  except (OSError, json.JSONDecodeError):
+    return False
+  same = saved == json.loads(json.dumps(config_lib.to_dict(config)))  # tuples as JSON lists
+  return (bool(steps) and max(steps) >= config.train.total_actions and same
+          and (workdir / 'eval_summary.json').is_file())
 
 
 def train(args, config, workdir: pathlib.Path, resume: bool) -> int:

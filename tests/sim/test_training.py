@@ -251,13 +251,13 @@ def test_reproduction_trains_evaluates_and_sets_ours_beside_the_paper(tmp_path, 
   assert '| DRGP (grasp_only) | 2 |' in text and '| MV-COBA (not run) | - |' in text and '97.8' in text
   assert 'Expected wall time' in text and 'expected about' in capsys.readouterr().out
   assert (out / 'curves-grasp_success.png').is_file()
-  # Started again it trains and evaluates nothing anew: every run is at its last action and
-  # every row of the evaluation is kept.
+  # Started again it trains and evaluates nothing anew: every run is finished and every row of
+  # the evaluation is kept.
   results = json.loads((out / 'results.json').read_text())
   assert reproduce_cli.main(['--config', TINY, '--methods', 'grasp_only', '--seeds', '0', '1',
                              '--actions', '4', '--runs', '1', '--max-actions', '2',
                              '--suites', 'occluded', '--workdir', str(tmp_path / 'sweep'),
                              '--out', str(out)]) == 0
   printed = capsys.readouterr().out
-  assert printed.count('resumed from') == 2 and printed.count('kept from') == 2
+  assert printed.count('finished already') == 2 and printed.count('kept from') == 2
   assert json.loads((out / 'results.json').read_text()) == results
