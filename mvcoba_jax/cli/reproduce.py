@@ -29,10 +29,10 @@ from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.cli import train as train_cli
 from mvcoba_jax.suites import SUITES, suite_files
 
-# Rough speeds on a 2-core CPU, native backend, default preset (docs/results): what the expected
-# wall time is computed from.
-TRAIN_ACTIONS_PER_S = 8.0
-EVAL_S_PER_CASE_RUN = 3.0
+# Rough speeds on a 2-core CPU, native backend, default preset (docs/results/reproduction.md:
+# 54144 actions in 88 min, 1350 case runs in 55 min): what the expected wall time is computed from.
+TRAIN_ACTIONS_PER_S = 10.0
+EVAL_S_PER_CASE_RUN = 2.5
 
 
 def training_seconds(workdirs) -> float:
