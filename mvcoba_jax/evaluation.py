@@ -4,8 +4,8 @@ Each run starts from its case (padded to the scene's object slots) with a few mi
 degrees of placement noise, so the n runs of a case differ as real resets do. A run ends when
 every object is picked, when more than `env.max_failures` consecutive actions fail, or at the action
 cap; finished runs stop counting while the batch steps on in lockstep (on emptied tables, which
-cost a fraction of a cluttered one: benchmarks/finished_runs.py), and the loop stops as soon as
-every run has finished.
+cost a fraction of a cluttered one) until the runs still going move to a smaller batch
+(benchmarks/finished_runs.py), and the loop stops as soon as every run has finished.
 """
 from __future__ import annotations
 

@@ -139,7 +139,8 @@ def kept_rows(out: pathlib.Path, settings: dict[tuple[str, str], dict]) -> dict:
     raise ResultsError(f'{path}: cannot read evaluation results to resume ({e})') from None
   report = {}
   for (suite, label), wanted in settings.items():
-    row = data.get(suite, {}).get(label) if isinstance(data, dict) else None
+    rows = data.get(suite) if isinstance(data, dict) else None
+    row = rows.get(label) if isinstance(rows, dict) else None
     if isinstance(row, dict) and row.get('settings') == wanted:
       report.setdefault(suite, {})[label] = rescored(row, f'{path}: {suite}/{label}')
   return report

@@ -15,7 +15,8 @@ parameters, cases and settings are the same). --tables joins the results of eval
 apart (in parallel, or on other machines) into one table, with no compile. With
 --save-visuals, each run also gets a PNG strip of its heightmaps and actions in
 --out/visuals/SUITE/METHOD/, beside losses.json: every object that left the workspace, the action
-it left in and where it was when it began. With --video, each run gets an MP4 of the scene and the gripper in --out/videos/SUITE/METHOD/.
+it left in and where it was when it began. With --video, each run gets an MP4 of the scene and
+the gripper in --out/videos/SUITE/METHOD/.
 """
 from __future__ import annotations
 
@@ -71,7 +72,8 @@ def main(argv=None) -> int:
   parser.add_argument('--seed', type=int, default=0)
   parser.add_argument('--resume', action='store_true',
                       help="keep the rows of --out's results.json evaluated with the same "
-                           'checkpoint, cases and settings; evaluate the rest')
+                           'checkpoint, cases and settings; evaluate the rest (videos and '
+                           'strips are written for those only)')
   parser.add_argument('--save-visuals', action='store_true',
                       help='write a PNG strip of heightmaps and actions per run')
   parser.add_argument('--video', action='store_true',
