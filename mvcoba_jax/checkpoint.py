@@ -68,10 +68,18 @@ def _leaves(state) -> dict:
           if leaf.size}
 
 
+def latest_step(workdir) -> int | None:
+  """The step of a training work directory's latest completed checkpoint, None without one;
+  looks without creating."""
+  folder = pathlib.Path(workdir) / 'checkpoints'
+  steps = [int(p.name) for p in folder.iterdir()
+           if p.is_dir() and p.name.isdigit()] if folder.is_dir() else []
+  return max(steps, default=None)
+
+
 def holds_checkpoint(workdir) -> bool:
   """Whether a training work directory holds a completed checkpoint; looks without creating."""
-  folder = pathlib.Path(workdir) / 'checkpoints'
-  return folder.is_dir() and any(p.is_dir() and p.name.isdigit() for p in folder.iterdir())
+  return latest_step(workdir) is not None
 
 
 class Checkpoints:

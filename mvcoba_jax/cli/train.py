@@ -28,7 +28,12 @@ from tqdm import tqdm
 
 from mvcoba_jax import config as config_lib
 from mvcoba_jax import methods, runtime, sharding
-from mvcoba_jax.checkpoint import CheckpointError, Checkpoints, holds_checkpoint
+from mvcoba_jax.checkpoint import (
+  CheckpointError,
+  Checkpoints,
+  holds_checkpoint,
+  latest_step,
+)
 from mvcoba_jax.run_log import (
   action_records,
   plot_curves,
@@ -112,14 +117,13 @@ def main(argv=None) -> int:
 def finished(workdir: pathlib.Path, config) -> bool:
   """Whether a run of a sweep has nothing left to do: trained to the end with this very config
   and evaluated (a resumed sweep passes over it without compiling)."""
-  folder = workdir / 'checkpoints'
-  steps = [int(p.name) for p in folder.iterdir() if p.name.isdigit()] if folder.is_dir() else []
+  step = latest_step(workdir)
   try:
     saved = json.loads((workdir / 'config.json').read_text())
   except (OSError, json.JSONDecodeError):
     return False
   same = saved == json.loads(json.dumps(config_lib.to_dict(config)))  # tuples as JSON lists
-  return (bool(steps) and max(steps) >= config.train.total_actions and same
+  return (step is not None and step >= config.train.total_actions and same
           and (workdir / 'eval_summary.json').is_file())
 
 

@@ -65,13 +65,19 @@ def test_vmapped_evaluation_equals_cases_one_by_one(setup):
       assert (np.asarray(a) == np.asarray(b)[i]).all()
 
 
-def test_a_run_that_finished_early_leaves_the_others_as_they_were_alone(setup, tmp_path):
+@pytest.fixture
+def one_and_three(setup, tmp_path):
+  """Layouts of a lone cube (the heuristic clears it in one or two actions) and of `three`."""
+  _, env, _, layouts, _, _ = setup
+  (tmp_path / 'one.scn').write_text('cube red 0.05 0.0 0\n')
+  return case_to_layout(read_case(tmp_path / 'one.scn'), env), jax.tree.map(lambda x: x[1], layouts)
+
+
+def test_a_run_that_finished_early_leaves_the_others_as_they_were_alone(setup, one_and_three):
   """A finished run steps on with its table emptied (cheaper); the batch's other runs do not
   notice."""
-  folder, env, run, layouts, keys, _ = setup
-  (tmp_path / 'one.scn').write_text('cube red 0.05 0.0 0\n')
-  one = case_to_layout(read_case(tmp_path / 'one.scn'), env)
-  three = jax.tree.map(lambda x: x[1], layouts)
+  _, _, run, _, keys, _ = setup
+  one, three = one_and_three
   together = run(stack_layouts([one, three]), keys)
   alone = run(jax.tree.map(lambda x: jnp.stack([x] * 2), three), jnp.stack([keys[1]] * 2))
   first, second = evaluation.run_logs(together)
@@ -80,14 +86,12 @@ def test_a_run_that_finished_early_leaves_the_others_as_they_were_alone(setup, t
     assert (np.asarray(a)[1] == np.asarray(b)[1]).all()
 
 
-def test_runs_moved_to_a_smaller_batch_end_as_in_the_whole_batch(setup, tmp_path):
+def test_runs_moved_to_a_smaller_batch_end_as_in_the_whole_batch(setup, one_and_three):
   """Two of four runs finish early; the runs still going move to a batch of two. With
   the heuristic (no network, nothing that rounds by batch size) every counter and every counted
   step of the trace is what the whole batch gives."""
-  folder, env, _, layouts, _, _ = setup
-  (tmp_path / 'one.scn').write_text('cube red 0.05 0.0 0\n')
-  one = case_to_layout(read_case(tmp_path / 'one.scn'), env)
-  three = jax.tree.map(lambda x: x[1], layouts)
+  env = setup[1]
+  one, three = one_and_three
   four = stack_layouts([one, one, one, three])
   keys = jax.random.split(jax.random.PRNGKey(3), 4)
   policy = evaluation.heuristic_policy(env.config.env.num_rotations)
