@@ -97,10 +97,13 @@ def to_world(action: PixelAction, depth, views: tuple[int, ...], config: Config)
   return Action(primitive=action.primitive, rotation=action.rotation, x=x, y=y, z=z)
 
 
-def reward(primitive, grasp_success, changed):
-  """Grasp 1 on success, 0.5 on a failure that changed the scene; push 0.5 on change."""
-  grasp_reward = jnp.where(grasp_success, 1.0, jnp.where(changed, 0.5, 0.0))
-  return jnp.where(primitive == GRASP, grasp_reward, jnp.where(changed, 0.5, 0.0))
+def reward(primitive, grasp_success, changed, train: TrainConfig):
+  """Grasp 1 on success, `train.failed_grasp_reward` on a failure that changed the scene, else
+  0; push 0.5 on change, else `train.no_change_push_reward`."""
+  grasp_reward = jnp.where(grasp_success, 1.0,
+                           jnp.where(changed, train.failed_grasp_reward, 0.0))
+  push_reward = jnp.where(changed, 0.5, train.no_change_push_reward)
+  return jnp.where(primitive == GRASP, grasp_reward, push_reward)
 
 
 def failed(primitive, grasp_success, changed):
@@ -108,19 +111,20 @@ def failed(primitive, grasp_success, changed):
   return jnp.where(primitive == GRASP, ~grasp_success, ~changed)
 
 
-def future_value(q_next, changed, method: str):
-  """max Q(s', a') over the primitive the rule picks at s' (over both for max-Q rules), (B,)."""
+def future_value(q_next, changed, method: str, train: TrainConfig):
+  """max Q(s', a') over the primitive the rule picks at s' (over both for max-Q rules and with
+  `train.future_max='both'`), (B,)."""
   b = q_next.shape[0]
   best = q_next.reshape(b, 2, -1).max(axis=-1)
-  if methods.get(method).rule == 'max_q':
+  if methods.get(method).rule == 'max_q' or train.future_max == 'both':
     return best.max(axis=-1)
   primitive = rule_primitive(method, changed, best)
   return jnp.take_along_axis(best, primitive[:, None], axis=1)[:, 0]
 
 
 def target_value(q_next, changed, done, rew, method: str, train: TrainConfig):
-  """y = r + gamma * max Q_target(s', a') over the primitive the rule picks at s' (0 where done)."""
-  return bootstrap(future_value(q_next, changed, method), done, rew, train)
+  """y = r + gamma * max Q_target(s', a') over `future_value`'s primitives (0 where done)."""
+  return bootstrap(future_value(q_next, changed, method, train), done, rew, train)
 
 
 def bootstrap(future, done, rew, train: TrainConfig):

@@ -31,6 +31,7 @@ __all__ = ['CameraConfig', 'Config', 'ConfigError', 'EnvConfig', 'NetworkConfig'
 
 TRUNKS = ('small', 'densenet121')
 TARGETS = ('network', 'acting')  # train.target
+FUTURE_MAX = ('rule', 'both')  # train.future_max
 
 
 @dataclasses.dataclass(frozen=True)
@@ -88,6 +89,19 @@ class TrainConfig:
   # paper's), the target network run on each sampled s' at update time. 'acting' trains 1.7x as
   # many actions/s at B=8 and learned as well over 3 seeds (docs/results/learner-throughput.md).
   target: str = 'acting'
+  # The learning recipe (the `authors` preset holds the MV-COBA authors' code's values; these
+  # defaults are the paper's text): rewards of a failed grasp that changed the scene and of a
+  # push that changed nothing; whether an action that changed nothing bootstraps (False: its
+  # future is 0, as in VPG's and the authors' code); the future's max over the rule's primitive
+  # ('rule') or over both primitives' maps ('both'); every grasp also labelled at its rotation
+  # turned half way (a parallel-jaw grasp is the same grasp turned by 180 degrees); each update
+  # also trains on the B transitions stored this step, besides `batch_size` replayed ones.
+  failed_grasp_reward: float = 0.5
+  no_change_push_reward: float = 0.0
+  bootstrap_no_change: bool = True
+  future_max: str = 'rule'
+  grasp_symmetry: bool = False
+  fresh_in_batch: bool = False
   checkpoint_every: int = 25  # host iterations between checkpoints
   curve_window: int = 200  # attempts in the sliding window of the training curves
 
@@ -101,7 +115,8 @@ class TrainConfig:
         'explore_min_height': Between(0, 0.4), 'replay_capacity': Between(1, 10 ** 7),
         'batch_size': Between(1, 4096), 'priority_exponent': Between(0, 10),
         'target_update_period': Between(1, 10 ** 9), 'target': TARGETS,
-        'checkpoint_every': Between(1, 10 ** 9),
+        'checkpoint_every': Between(1, 10 ** 9), 'failed_grasp_reward': Between(-1, 1),
+        'no_change_push_reward': Between(-1, 1), 'future_max': FUTURE_MAX,
         'curve_window': Between(1, 10 ** 7)})
 
 
@@ -148,6 +163,15 @@ def validate(config: Config) -> Config:
     raise ConfigError(f'train.epsilon_end={train.epsilon_end!r} must not exceed '
                       f'train.epsilon_start={train.epsilon_start!r}')
   widths = (DENSENET_GROWTH,) if net.trunk == 'densenet121' else net.features
+  if train.grasp_symmetry and env.num_rotations % 2:
+    raise ConfigError(f'train.grasp_symmetry needs an even env.num_rotations (the grasp turned '
+                      f'half way); it is {env.num_rotations}')
+  if env.heap_half > scene.workspace_half:
+    raise ConfigError(f'env.heap_half={env.heap_half!r} must not exceed scene.workspace_half='
+                      f'{scene.workspace_half!r}')
+  if env.occluded_share > 0 and not scene.occluders:
+    raise ConfigError(f'env.occluded_share={env.occluded_share!r} needs an occluder slot in '
+                      'scene.occluders')
   if any(w % net.groups for w in widths):
     raise ConfigError(f'network.groups={net.groups} must divide every channel count of the '
                       f'{net.trunk} trunk ({", ".join(map(str, widths))}: network.features)')
@@ -177,7 +201,7 @@ def validate(config: Config) -> Config:
   return config
 
 
-PRESETS = ('default', 'paper', 'tiny')  # modules of mvcoba_jax.presets
+PRESETS = ('default', 'paper', 'paper_text', 'authors', 'tiny')  # modules of mvcoba_jax.presets
 
 
 def load_preset(preset: str | pathlib.Path) -> Config:
@@ -334,7 +358,10 @@ RETIRED = {TrainConfig: ('max_consecutive_failures',)}
 
 # Fields added after runs were saved without them, with the value those runs used (which is not
 # the current default): a saved config that lacks them gets that value, without a warning.
-LEGACY = {TrainConfig: {'target': 'network'}}
+LEGACY = {TrainConfig: {'target': 'network', 'failed_grasp_reward': 0.5,
+                        'no_change_push_reward': 0.0, 'bootstrap_no_change': True,
+                        'future_max': 'rule', 'grasp_symmetry': False, 'fresh_in_batch': False},
+          EnvConfig: {'drop': 'spread', 'occluded_share': 0.0}}
 
 # Fields that choose where a run computes, not what it computes: a saved config that lacks them
 # (written before they existed) runs on this machine's choice without a warning.
@@ -353,6 +380,18 @@ def defaulted(data: dict, config, prefix: str = '') -> dict:
     elif dataclasses.is_dataclass(value):
       found.update(defaulted(data[f.name], value, f'{prefix}{f.name}.'))
   return found
+
+
+def trained_as(config: Config) -> dict:
+  """What a policy was trained as: `to_dict` without the seed and the fields that choose where
+  it ran (`RUNTIME_FIELDS`). Policies that share it differ only in their training seed, which is
+  what an interval over seeds may pool."""
+  data = to_dict(config)
+  del data['seed']
+  for name in RUNTIME_FIELDS:
+    section, field = name.split('.')
+    del data[section][field]
+  return data
 
 
 def _value(value, tp, where: str):

@@ -150,7 +150,8 @@ def advance(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch,
     states, obs, runs = batch.states, batch.obs, batch.runs
     keys, k_act = jax.vmap(jax.random.split, out_axes=1)(batch.keys)
     action = policy(obs, batch.changed, k_act)
-    next_states, next_obs, out = task.step(env, views, states, obs, runs.failures, action)
+    next_states, next_obs, out = task.step(env, views, states, obs, runs.failures, action,
+                                            env.config.train)
     info = out.info
     active = ~runs.finished
     count = lambda total, x: total + jnp.where(active, x, 0).astype(jnp.int32)

@@ -40,6 +40,13 @@ COLUMNS = (('grasp_success', 'grasp_success', 'grasp success'),
            ('objects_picked', 'completion', 'objects picked (paper: completion)'))
 
 
+def paper_name(group: str) -> str:
+  """The paper's name of a row group of `report.training_groups` (`mvcoba {...}` ->
+  `MV-COBA {...}`)."""
+  method = report.method_of(group)
+  return PAPER_NAMES.get(method, method) + group[len(method):]
+
+
 def comparison(suite: str, ours: dict[str, dict]) -> str:
   """Markdown: per method, our mean [95% CI over seeds] and the paper's figure, per metric.
 
@@ -49,7 +56,7 @@ def comparison(suite: str, ours: dict[str, dict]) -> str:
   lines = [head]
   paper = RESULTS.get(suite, {})
   for method, entry in ours.items():
-    name = PAPER_NAMES.get(method, method)
+    name = PAPER_NAMES.get(report.method_of(method), method)
     cells = []
     for key, paper_key, _ in COLUMNS:
       value = entry.get(key)
@@ -59,7 +66,7 @@ def comparison(suite: str, ours: dict[str, dict]) -> str:
       cells += [ci, '-' if theirs is None else f'{theirs:.1f}']
     lines.append(f'| {name} ({method}) | {entry["seeds"]} | ' + ' | '.join(cells) + ' |')
   for name, figures in paper.items():
-    if name not in {PAPER_NAMES.get(m, m) for m in ours}:
+    if name not in {PAPER_NAMES.get(report.method_of(m)) for m in ours}:
       cells = []
       for _, paper_key, _ in COLUMNS:
         cells += ['-', '-' if paper_key not in figures else f'{figures[paper_key]:.1f}']
@@ -78,10 +85,10 @@ def separations(ours: dict[str, dict]) -> str:
                     key=lambda pair: -pair[0][0])
     beats = []
     for i, (high, method) in enumerate(scored):
-      below = [PAPER_NAMES.get(m, m) for low, m in scored[i + 1:]
+      below = [paper_name(m) for low, m in scored[i + 1:]
                if intervals.separated(high, low)]
       if below:
-        beats.append(f'{PAPER_NAMES.get(method, method)} > {", ".join(below)}')
+        beats.append(f'{paper_name(method)} > {", ".join(below)}')
     lines.append(f'- {label}: ' + ('; '.join(beats) if beats else
                                    'no two methods distinguishable'))
   return '\n'.join(lines)

@@ -21,11 +21,37 @@ class ResultsError(ValueError):
   """An earlier evaluation's results.json that --tables cannot use."""
 
 
+def distinct_names(paths: list[str]) -> list[str]:
+  """Per path, the fewest trailing parts of its absolute path that no other path of `paths` ends
+  with (`a/train`, `b/train` -> `a/train`, `b/train`; `runs/s0`, `runs/s1` -> `s0`, `s1`).
+
+  Raises ResultsError for a folder given twice: it would be counted as two policies or seeds.
+  """
+  parts = [pathlib.Path(p).resolve().parts for p in paths]
+  first = {}
+  for p, path in zip(parts, paths):
+    if p in first:
+      raise ResultsError(f'{path} is given twice (also as {first[p]}); each folder counts once')
+    first[p] = path
+  names = []
+  for i, p in enumerate(parts):
+    n = 1
+    while any(q[-n:] == p[-n:] for j, q in enumerate(parts) if j != i):
+      n += 1
+    names.append('/'.join(p[-n:]))
+  return names
+
+
 def row_labels(directories: list[str], methods: list[str]) -> list[str]:
-  """Table rows of the checkpoints: the method, with the run's folder when a method repeats."""
-  repeated = {m for m in methods if methods.count(m) > 1}
-  return [f'{m} ({pathlib.Path(d).name})' if m in repeated else m
-          for d, m in zip(directories, methods)]
+  """Table rows of the checkpoints, one each: the method, and when a method repeats, as much of
+  each folder's path as tells it apart from the method's other folders."""
+  distinct_names(directories)  # refuses a folder given twice
+  labels = list(methods)
+  for method in {m for m in methods if methods.count(m) > 1}:
+    mine = [i for i, m in enumerate(methods) if m == method]
+    for i, name in zip(mine, distinct_names([directories[i] for i in mine])):
+      labels[i] = f'{method} ({name})'
+  return labels
 
 
 def json_safe(tree):
@@ -59,19 +85,58 @@ def suite_tables(suite: str, rows: dict[str, dict]) -> list[str]:
 
 
 def method_of(label: str) -> str:
-  """The method of a row label (`row_labels` adds the run's folder when a method repeats)."""
-  return label.split(' (')[0]
+  """The method of a row label (`row_labels` and `seed_intervals` add to it after a space)."""
+  return label.split(' ')[0]
+
+
+def _flat(tree, prefix=''):
+  if not isinstance(tree, dict):
+    return {prefix[:-1]: json.dumps(tree)}
+  return {k: v for name, sub in tree.items() for k, v in _flat(sub, f'{prefix}{name}.').items()}
+
+
+def training_groups(rows: dict[str, dict]) -> dict[str, list[str]]:
+  """Rows that are one method trained with one config except its seed, named: the method, or
+  when it was trained in several configs, the method and the fields where its config differs
+  from the value most of them hold (`mvcoba {train.gamma=0.2}`). A training seed met again in a config (one policy evaluated from
+  two folders) goes to a group of its own, so an interval never counts a seed twice. Rows read
+  from results written before evaluation recorded the training config (`settings.training`) form
+  a group of their own per method."""
+  found, seeds = {}, {}
+  for label, result in rows.items():
+    settings = result.get('settings') or {}
+    training = settings.get('training')
+    key = json.dumps(training, sort_keys=True) if isinstance(training, dict) else None
+    seen = seeds.setdefault((method_of(label), key), [])
+    again = seen.count(settings.get('training_seed')) if key is not None else 0
+    seen.append(settings.get('training_seed'))
+    found.setdefault(method_of(label), {}).setdefault((key, again), []).append(label)
+  groups = {}
+  for method, by_config in found.items():
+    if len(by_config) == 1:
+      groups[method] = next(iter(by_config.values()))
+      continue
+    flat = {key: _flat(json.loads(key)) for key, _ in by_config if key is not None}
+    usual = {}  # field -> its most common value among the configs (the first met on a tie)
+    for f in dict.fromkeys(f for values in flat.values() for f in values):
+      seen = [values.get(f, '-') for values in flat.values()]
+      usual[f] = max(dict.fromkeys(seen), key=seen.count)
+    for (key, again), labels in by_config.items():
+      about = ('training config not recorded' if key is None else
+               ', '.join(f'{f}={v}' for f, v in flat[key].items() if v != usual[f]))
+      about += f'{", " if about else ""}seeds met again ({again})' if again else ''
+      groups[f'{method} {{{about}}}' if about else method] = labels
+  return groups
 
 
 def seed_intervals(rows: dict[str, dict], minimum: int = 2) -> dict[str, dict]:
-  """Per method evaluated from `minimum` or more checkpoints (training seeds): each metric's mean
-  over seeds and cases with its 95% stratified bootstrap interval (`intervals.interval`), over
-  the cases every checkpoint ran; None where a metric is undefined in some case."""
-  groups = {}
-  for label, result in rows.items():
-    groups.setdefault(method_of(label), []).append(result)
+  """Per group of `training_groups` evaluated from `minimum` or more checkpoints (training seeds):
+  each metric's mean over seeds and cases with its 95% stratified bootstrap interval
+  (`intervals.interval`), over the cases every checkpoint ran; None where a metric is undefined
+  in some case."""
   out = {}
-  for method, results in groups.items():
+  for group, labels in training_groups(rows).items():
+    results = [rows[label] for label in labels]
     if len(results) < minimum:
       continue
     cases = [c for c in results[0]['cases'] if all(c in r['cases'] for r in results)]
@@ -79,7 +144,7 @@ def seed_intervals(rows: dict[str, dict], minimum: int = 2) -> dict[str, dict]:
     for key, _ in METRICS:
       scores = np.array([[r['cases'][c][key] for c in cases] for r in results], np.float64)
       entry[key] = intervals.interval(scores) if np.isfinite(scores).all() else None
-    out[method] = entry
+    out[group] = entry
   return out
 
 
@@ -158,10 +223,11 @@ def in_order(report: dict, keys) -> dict:
 def joined_report(folders: list[str]) -> dict:
   """The results.json of earlier evaluations as one report, scored again from their runs.
 
-  A method met twice in a suite gets its --out folder's name after it.
+  A row label met again in a suite gets after it as much of its --out folder's path as tells
+  the folders apart; a folder given twice is refused.
   """
   report = {}
-  for folder in folders:
+  for folder, name in zip(folders, distinct_names(folders)):
     path = pathlib.Path(folder) / 'results.json'
     try:
       data = json.loads(path.read_text())
@@ -172,7 +238,10 @@ def joined_report(folders: list[str]) -> dict:
     for suite, rows in data.items():
       for method, result in rows.items():
         rows_here = report.setdefault(suite, {})
-        label = f'{method} ({pathlib.Path(folder).name})' if method in rows_here else method
+        label = f'{method} ({name})' if method in rows_here else method
+        if label in rows_here:
+          raise ResultsError(f'{path}: {suite}/{method} cannot be told apart from a row of '
+                             'another folder')
         rows_here[label] = rescored(result, f'{path}: {suite}/{method}')
   return report
 

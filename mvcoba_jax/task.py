@@ -14,6 +14,7 @@ import jax.numpy as jnp
 from flax import struct
 
 from mvcoba_jax import agent, perception
+from mvcoba_jax.config import TrainConfig
 from mvcoba_jax.sim.tabletop import EnvState, StepInfo, Tabletop
 
 
@@ -38,10 +39,10 @@ def observe(env: Tabletop, states: EnvState, per_env: Callable = _whole) -> perc
 
 
 def step(env: Tabletop, views: tuple[int, ...], states: EnvState, obs: perception.Observation,
-         failures, action: agent.PixelAction,
+         failures, action: agent.PixelAction, train: TrainConfig,
          per_env: Callable = _whole) -> tuple[EnvState, perception.Observation, Outcome]:
   """Executes `action` (B,) chosen on `obs` in every tabletop; returns the tabletops, what they
-  look like now and the outcome."""
+  look like now and the outcome, rewarded as `train` says."""
   config = env.config
   states, info = per_env(jax.vmap(env.step))(
       states, agent.to_world(action, obs.depth, views, config))
@@ -49,7 +50,7 @@ def step(env: Tabletop, views: tuple[int, ...], states: EnvState, obs: perceptio
   healthy = info.healthy
   changed = perception.change_observed(obs, next_obs, info.grasp_success,
                                        config.perception) & healthy
-  reward = jnp.where(healthy, agent.reward(action.primitive, info.grasp_success, changed), 0.0)
+  reward = jnp.where(healthy, agent.reward(action.primitive, info.grasp_success, changed, train), 0.0)
   failures = jnp.where(agent.failed(action.primitive, info.grasp_success, changed),
                        failures + 1, 0)
   cleared = ~jnp.any(states.in_play, axis=1)

@@ -138,6 +138,8 @@ class Trainer:
     Summed, not averaged: each transition then moves the parameters as much as one of VPG's
     single-transition steps at the paper's learning rate. The mean made a batch of B worth one
     such step: learning per action was 16 times slower than VPG's (issue #4, first default run).
+    With `train.grasp_symmetry` a grasp's target also labels its rotation turned half way, in
+    the same forward (two rotations per transition).
     """
     t = self.config.train
     if t.target == 'acting':
@@ -145,23 +147,45 @@ class Trainer:
     else:
       q_next = self.q_maps(target_params, batch.next_obs)
       y = agent.target_value(q_next, batch.changed, batch.done, batch.reward, self.method, t)
-    q = self.q_maps(params, batch.obs, batch.rotation[:, None])
-    pred = networks.executed_q(q, batch.primitive, batch.row, batch.col)
-    per = networks.huber_loss(pred, jax.lax.stop_gradient(y), t.huber_delta)
-    return jnp.sum(per * valid.astype(jnp.float32)), pred - y
+    y = jax.lax.stop_gradient(y)
+    weight = valid.astype(jnp.float32)
+    if not t.grasp_symmetry:
+      q = self.q_maps(params, batch.obs, batch.rotation[:, None])
+      pred = networks.executed_q(q, batch.primitive, batch.row, batch.col)
+      return jnp.sum(networks.huber_loss(pred, y, t.huber_delta) * weight), pred - y
+    k = self.config.env.num_rotations
+    turned = (batch.rotation + k // 2) % k
+    q = self.q_maps(params, batch.obs, jnp.stack([batch.rotation, turned], axis=1))
+    pred, pred_turned = (networks.executed_q(q[:, :, i:i + 1], batch.primitive, batch.row,
+                                             batch.col) for i in (0, 1))
+    is_grasp = (batch.primitive == agent.GRASP).astype(jnp.float32)
+    per = (networks.huber_loss(pred, y, t.huber_delta)
+           + is_grasp * networks.huber_loss(pred_turned, y, t.huber_delta))
+    return jnp.sum(per * weight), pred - y
 
-  def update(self, state: TrainState, key, enabled=True) -> tuple[TrainState, jnp.ndarray]:
+  def update(self, state: TrainState, key, enabled=True,
+             fresh: tuple[replay_lib.Transition, jnp.ndarray] | None = None
+             ) -> tuple[TrainState, jnp.ndarray]:
     """One SGD step on a prioritised batch; a non-finite loss or parameter leaves all as it was.
 
-    Without `enabled` the step is computed and discarded: selecting its result costs far less on
-    a CPU than branching around it, since XLA's CPU backend runs the update inside `lax.cond` 5
-    times slower (docs/results/native-backend.md). Returns the state and the loss per transition
-    (0 when the step was refused or not enabled).
+    `fresh`: (transitions, whether they are valid) trained on too, in the same step, after the
+    sampled ones (`train.fresh_in_batch`); their priorities are not updated here, since each
+    was just written with the replay's highest. Without `enabled` the step is computed and
+    discarded: selecting its result costs far less on a CPU than branching around it, since
+    XLA's CPU backend runs the update inside `lax.cond` 5 times slower
+    (docs/results/native-backend.md). Returns the state and the loss per transition (0 when the
+    step was refused or not enabled).
     """
     t = self.config.train
     index, batch, valid = replay_lib.sample(state.replay, key, t.batch_size, t.priority_exponent)
+    if fresh is not None:
+      transitions, fresh_valid = fresh
+      batch = jax.tree.map(lambda a, b: jnp.concatenate([a, b.astype(a.dtype)]), batch,
+                           transitions)
+      valid = jnp.concatenate([valid, jnp.broadcast_to(fresh_valid, transitions.reward.shape)])
     (loss, td), grads = jax.value_and_grad(self.loss, has_aux=True)(
         state.params, state.target_params, batch, valid)
+    td = td[:t.batch_size]
     updates, opt_state = self.optimizer.update(grads, state.opt_state, state.params)
     params = optax.apply_updates(state.params, updates)
     sound = jnp.isfinite(loss) & _all_finite(params)
@@ -194,7 +218,7 @@ class Trainer:
     maps = agent.rule_maps(q, state.obs.depth, self.views, self.method, self.config)
     action, explored = agent.epsilon_greedy(maps, state.changed, occupied, eps, k_act, self.method)
     env_states, obs, out = task.step(self.env, self.views, state.env, state.obs, state.failures,
-                                     action, self.per_env)
+                                     action, t, self.per_env)
     info, healthy, changed, done = out.info, out.info.healthy, out.changed, out.done
     env_states, reserve = reserve_lib.swap_in(self.per_env(jax.vmap(self.env.reset)),
                                               state.reserve, env_states, done, k_reset)
@@ -206,14 +230,17 @@ class Trainer:
     # sees next. A zero future there made clearing the last object worth less than a failed
     # grasp that nudged it (0.5 + gamma * Q > 1), and the learned policy avoided clearing.
     # Only bad physics does not bootstrap: its next state is not a state of the task.
+    # No future after an action that changed nothing, with `train.bootstrap_no_change` off.
+    no_future = ~healthy | (~changed if not t.bootstrap_no_change else False)
     transition = replay_lib.Transition(
         obs=state.obs, primitive=action.primitive, rotation=action.rotation, row=action.row,
         col=action.col, reward=out.reward, next_obs=where_envs(healthy, obs, state.obs),
-        done=~healthy, changed=changed | done, next_value=jnp.zeros_like(out.reward))
+        done=no_future, changed=changed | done, next_value=jnp.zeros_like(out.reward))
     if t.target == 'acting':
       # The last step's transitions led to the states acted on now (or ended in bad physics,
       # which does not bootstrap): this step's forward values their next states.
-      store = state.pending.replace(next_value=agent.future_value(q, state.changed, self.method))
+      store = state.pending.replace(
+          next_value=agent.future_value(q, state.changed, self.method, t))
       add = learn & state.pending_valid
       state = state.replace(
           pending=jax.tree.map(lambda new, old: jnp.where(learn, new, old), transition,
@@ -223,7 +250,8 @@ class Trainer:
       store, add = transition, learn
     replay = jax.lax.cond(add, lambda r: replay_lib.add(r, store), lambda r: r, state.replay)
     state = state.replace(replay=replay)
-    state, loss = self.update(state, k_learn, learn & (replay.size > 0))
+    fresh = (store, add) if t.fresh_in_batch else None
+    state, loss = self.update(state, k_learn, learn & (replay.size > 0), fresh)
 
     b = done.shape[0]
     state = state.replace(

@@ -116,8 +116,9 @@ def main(argv=None) -> int:
                      for f in files]
               for name, files in suite_files(args.suite).items()}
     bad = [m for cases in suites.values() for m in evaluation.case_problems(cases, base)]
-    sources = [(config_lib.evaluated(c, args.overrides), model, step)
-               for c, model, step in map(load, args.checkpoint)]
+    loaded = [load(path) for path in args.checkpoint]
+    trained = [(config_lib.trained_as(c), c.seed) for c, _, _ in loaded] + [(None, None)]
+    sources = [(config_lib.evaluated(c, args.overrides), model, step) for c, model, step in loaded]
     sources += [args.baseline] if args.baseline else []
     source_names = [evaluation.source_name(s) for s in sources]
     labels = (report_lib.row_labels(args.checkpoint, source_names[:len(args.checkpoint)])
@@ -126,9 +127,11 @@ def main(argv=None) -> int:
         'checkpoint': path, 'step': None if isinstance(source, str) else source[2],
         'params': None if isinstance(source, str) else fingerprint(source[1]),
         'cases': [c.name for c in cases], 'runs': args.runs, 'max_actions': args.max_actions,
-        'seed': args.seed, 'set': args.overrides}
+        'seed': args.seed, 'set': args.overrides, 'training': training[0],
+        'training_seed': training[1]}
         for suite, cases in suites.items()
-        for label, source, path in zip(labels, sources, args.checkpoint + [None])}
+        for label, source, path, training in zip(labels, sources, args.checkpoint + [None],
+                                                 trained)}
     report = report_lib.kept_rows(pathlib.Path(args.out), settings) if args.resume else {}
   except (config_lib.ConfigError, ScenarioError, PolicyError, report_lib.ResultsError) as e:
     print(f'error: {e}', file=sys.stderr)

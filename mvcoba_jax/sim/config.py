@@ -16,6 +16,7 @@ from typing import Protocol
 from mvcoba_jax.sim.shapes import SHAPE_NAMES
 
 BACKENDS = ('auto', 'native', 'mjx')
+DROPS = ('spread', 'heap')  # env.drop
 
 
 class ConfigError(ValueError):
@@ -184,6 +185,14 @@ class SceneConfig:
 class EnvConfig:
   """Episode and primitive parameters."""
   num_objects: int = 10  # objects dropped by reset(key)
+  # How reset(key) drops them: 'spread', set down apart in their rest pose over the workspace
+  # less `drop_margin`; 'heap', in a random 3-D orientation into the central square of half
+  # side `heap_half`, so they land on each other (the MV-COBA authors' training scenes).
+  drop: str = 'spread'
+  heap_half: float = 0.125
+  # Share of reset(key)'s tabletops with an occluder between one camera (drawn) and the table,
+  # hiding all (occluder slot 0) or part (slot 1, shifted sideways) of what that camera sees.
+  occluded_share: float = 0.0
   num_rotations: int = 16
   settle_steps: int = 375  # physics steps (1.5 s) for placed or dropped objects to come to rest
   drop_margin: float = 0.06  # keep dropped object centres this far inside the workspace
@@ -209,7 +218,8 @@ class EnvConfig:
 
   def __post_init__(self):
     check(self, 'env.', {
-        'num_objects': Between(1, 256), 'num_rotations': Between(1, 64),
+        'num_objects': Between(1, 256), 'num_rotations': Between(1, 64), 'drop': DROPS,
+        'heap_half': Between(0.02, 1), 'occluded_share': Between(0, 1),
         'settle_steps': Between(0, 100000), 'drop_margin': Between(0, 0.2),
         'layer_height': Between(0, 1, low_open=True), 'grasp_depth': Between(0, 0.2),
         'lift_height': Between(0, 1, low_open=True), 'approach_height': Between(0, 1, low_open=True),

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from flax import struct
 
 from mvcoba_jax.sim import cameras, physics, primitives, shapes
@@ -20,6 +21,12 @@ from mvcoba_jax.sim.scene import GRIPPER_PARK, Scene, build_scene
 
 PLACEMENT_TRIES = 16  # candidate spots per object and drop layer
 PLACEMENT_GAP = 0.004  # clearance between footprint circles of objects dropped in one layer
+# Where `env.occluded_share` puts an occluder, in the frame of the camera it hides (x towards the
+# camera's horizontal position, as a fraction of its distance; y sideways; z height, m): slot 0
+# hides the whole workspace and slot 1 a part, as in the occluded suite's cases.
+OCCLUDE_WHOLE = (0.857, 0.0, 0.49)
+OCCLUDE_PART = (0.786, 0.036, 0.47)
+PART_SHIFT = 0.06  # the partial occluder's sideways shift is drawn from [-this, this] (m)
 
 
 @struct.dataclass
@@ -101,6 +108,8 @@ class Tabletop:
                                          jnp.float32)
     self._radius = jnp.asarray([shapes.footprint_radius(s.name) for s in slot_shapes],
                                jnp.float32)
+    self._bounding_radius = jnp.asarray([0.5 * np.linalg.norm(s.rest_extent)
+                                         for s in slot_shapes], jnp.float32)
 
   # ----------------------------------------------------------------------------- physics core
   def _place_gripper(self, sim: SimState, pose) -> SimState:
@@ -132,15 +141,19 @@ class Tabletop:
     """A random drop of `env.num_objects` objects: greedy non-overlapping spots in stacked layers.
 
     Objects that do not fit beside the others go to a layer `layer_height` higher and fall onto
-    the pile while the scene settles, as sequential drops would.
+    the pile while the scene settles, as sequential drops would. `env.drop='heap'` drops them in
+    a random 3-D orientation (spaced by the sphere that bounds each) into the central square of
+    half side `env.heap_half`, where few fit beside each other, so they land on each other.
     """
     env, m = self.config.env, self.num_slots
     n = env.num_objects
-    layers = 1 + n // 4
+    heap = env.drop == 'heap'
+    layers = n if heap else 1 + n // 4
     k_perm, k_place, k_yaw, k_color = jax.random.split(key, 4)
     order = jax.random.permutation(k_perm, m)
     in_play = jnp.zeros(m, bool).at[order[:n]].set(True)
-    lim = self.config.scene.workspace_half - env.drop_margin
+    lim = env.heap_half if heap else self.config.scene.workspace_half - env.drop_margin
+    radius = self._bounding_radius if heap else self._radius
     cands = jax.random.uniform(k_place, (n, layers * PLACEMENT_TRIES, 2), minval=-lim, maxval=lim)
     cand_layer = jnp.repeat(jnp.arange(layers), PLACEMENT_TRIES)
 
@@ -149,22 +162,56 @@ class Tabletop:
       s = order[i]
       dist = jnp.linalg.norm(cands[i][:, None, :] - xy[None], axis=-1)
       clash = placed[None] & (layer[None] == cand_layer[:, None]) & (
-          dist < self._radius[s] + self._radius[None] + PLACEMENT_GAP)
+          dist < radius[s] + radius[None] + PLACEMENT_GAP)
       free = ~jnp.any(clash, axis=1)
       j = jnp.where(jnp.any(free), jnp.argmax(free), free.shape[0] - 1)
       return xy.at[s].set(cands[i, j]), layer.at[s].set(cand_layer[j]), placed.at[s].set(True)
 
     xy, layer, _ = jax.lax.fori_loop(
         0, n, place, (jnp.zeros((m, 2)), jnp.zeros(m, jnp.int32), jnp.zeros(m, bool)))
-    z = self._rest_half_height + 0.002 + layer * env.layer_height
+    if heap:  # each layer clears the one below, whatever the orientations
+      z = self._bounding_radius + 0.002 + layer * jnp.maximum(
+          env.layer_height, 2 * jnp.max(radius) + PLACEMENT_GAP)
+    else:
+      z = self._rest_half_height + 0.002 + layer * env.layer_height
     pos = jnp.where(in_play[:, None], jnp.concatenate([xy, z[:, None]], axis=1),
                     self._park_qpos[:, :3])
-    yaw = jax.random.uniform(k_yaw, (m,), maxval=2 * jnp.pi)
-    quat = quat_mul(yaw_quat(yaw), self._rest_quat)
+    if heap:  # uniform over rotations: a normalised 4-D Gaussian
+      quat = jax.random.normal(k_yaw, (m, 4))
+      quat = quat / jnp.linalg.norm(quat, axis=1, keepdims=True)
+    else:
+      quat = quat_mul(yaw_quat(jax.random.uniform(k_yaw, (m,), maxval=2 * jnp.pi)),
+                      self._rest_quat)
     color = jnp.asarray(shapes.COLORS)[jax.random.permutation(k_color, jnp.arange(m) % 10)]
-    occluder_pos, occluder_quat = self.parked_occluders()
+    occluder_pos, occluder_quat = self.drawn_occluders(jax.random.fold_in(key, 1))
     return Layout(in_play=in_play, pos=pos, quat=quat, color=color,
                   occluder_pos=occluder_pos, occluder_quat=occluder_quat)
+
+  def drawn_occluders(self, key):
+    """Occluder poses of a random drop: with probability `env.occluded_share`, one camera (drawn)
+    hidden wholly by slot 0 or, with a second slot, as often partly by slot 1 shifted sideways
+    (`OCCLUDE_WHOLE`, `OCCLUDE_PART`); every other slot parked."""
+    pos, quat = self.parked_occluders()
+    share = self.config.env.occluded_share
+    if share == 0:
+      return pos, quat
+    k_on, k_camera, k_part, k_shift = jax.random.split(key, 4)
+    cameras = jnp.asarray([c.pos for c in self.config.scene.cameras], jnp.float32)
+    camera = cameras[jax.random.randint(k_camera, (), 0, len(cameras))]
+    part = (jax.random.bernoulli(k_part) if len(self.config.scene.occluders) > 1
+            else jnp.bool_(False))
+    shift = jax.random.uniform(k_shift, (), minval=-PART_SHIFT, maxval=PART_SHIFT)
+    along, side, height = (jnp.where(part, p, w) for p, w in zip(OCCLUDE_PART, OCCLUDE_WHOLE))
+    side = side + jnp.where(part, shift, 0.0)
+    azimuth = jnp.arctan2(camera[1], camera[0])
+    c, s = jnp.cos(azimuth), jnp.sin(azimuth)
+    along = along * jnp.hypot(camera[0], camera[1])
+    at = jnp.stack([c * along - s * side, s * along + c * side, height])
+    slot = part.astype(jnp.int32)
+    on = jax.random.uniform(k_on) < share
+    pos = pos.at[slot].set(jnp.where(on, at, pos[slot]))
+    quat = quat.at[slot].set(jnp.where(on, yaw_quat(azimuth), quat[slot]))
+    return pos, quat
 
   def parked_occluders(self):
     """Poses of the occluder slots when a layout uses none of them: at their model positions."""

@@ -12,9 +12,15 @@
 - isolated/: 16 cases of one object alone (each shape twice, random place and yaw): a policy's
   precision with nothing around to hold the object in place.
 Every case also holds one isolated object as a readiness check, as VPG and the paper do.
+
+  python -m mvcoba_jax.suites.generate --validation DIR [--cases 6]
+
+writes validation suites of the same kinds drawn from other seeds (val-random, val-ordered,
+val-occluded) for choosing training settings, never the shipped suites results are reported on.
 """
 from __future__ import annotations
 
+import argparse
 import pathlib
 import tempfile
 
@@ -217,6 +223,92 @@ def isolated_cases() -> list[str]:
   return cases
 
 
+VALIDATION_SEED = 10_000  # validation cases draw from seeds apart from the shipped suites
+
+
+def turned(parts, angle_deg: float, x0: float, y0: float, start_colour: int = 0) -> list[str]:
+  """Lines of `parts` (shape, dx, dy, yaw) turned together by `angle_deg` about their origin,
+  which goes to (x0, y0)."""
+  c, s = np.cos(np.radians(angle_deg)), np.sin(np.radians(angle_deg))
+  return [line(shape, COLOR_NAMES[(start_colour + i) % 10], x0 + c * dx - s * dy,
+               y0 + s * dx + c * dy, (yaw + angle_deg) % 360)
+          for i, (shape, dx, dy, yaw) in enumerate(parts)]
+
+
+def packed_case(seed: int) -> str:
+  """A validation case like the ordered suite's: a pinwheel, a framed square or a grid of 2-4 x
+  2-4 cubes, of drawn shapes, turned by a drawn angle about a drawn centre, and one isolated
+  object in the corner farthest from it."""
+  rng = np.random.default_rng(VALIDATION_SEED + seed)
+  u = CELL
+  kind = seed % 3
+  if kind == 0:
+    long, centre = rng.choice(('flat_box', 'arch')), rng.choice(('disk', 'cube', 'cylinder'))
+    parts = [(long, -0.5 * u, u, 0), (long, u, 0.5 * u, 90), (long, 0.5 * u, -u, 0),
+             (long, -u, -0.5 * u, 90), (centre, 0, 0, 0)]
+  elif kind == 1:
+    parts = [('arch', -u, 1.5 * u, 0), ('cube', 0.5 * u, 1.5 * u, 0),
+             ('arch', 1.5 * u, u, 90), ('cube', 1.5 * u, -0.5 * u, 0),
+             ('arch', u, -1.5 * u, 0), ('cube', -0.5 * u, -1.5 * u, 0),
+             ('arch', -1.5 * u, -u, 90), ('cube', -1.5 * u, 0.5 * u, 0)]
+    parts += [('cube', (i - 0.5) * u, (j - 0.5) * u, 0) for j in (0, 1) for i in (0, 1)]
+  else:
+    rows, cols = rng.integers(2, 5, size=2)
+    parts = [('cube', (c - (cols - 1) / 2) * u, (r - (rows - 1) / 2) * u, 0)
+             for r in range(rows) for c in range(cols)]
+  x0, y0 = rng.uniform(-0.04, 0.04, size=2)
+  corner = -np.sign([x0, y0]) * 0.17
+  isolated = ISOLATED[rng.integers(len(ISOLATED))]
+  return (HEADER + ''.join(turned(parts, rng.uniform(0, 90), x0, y0, int(rng.integers(10))))
+          + line(isolated, 'red', *corner, rng.uniform(0, 180)))
+
+
+def occluded_case(seed: int) -> str:
+  """A validation case like the occluded suite's: 4-7 objects set apart in drawn places and
+  poses, and either occluder 0 hiding the whole workspace from a drawn camera or occluders 1 and
+  2 each hiding a drawn part from one camera each."""
+  rng = np.random.default_rng(VALIDATION_SEED + 500 + seed)
+  placed, text, n = [], HEADER, rng.integers(4, 8)
+  while len(placed) < n:
+    shape = CLUTTER_SHAPES[rng.integers(len(CLUTTER_SHAPES))]
+    radius = shapes.footprint_radius(shape)
+    spot = rng.uniform(-0.17, 0.17, size=2)
+    if all(np.hypot(*(spot - xy)) > radius + r + 0.01 for xy, r in placed):
+      placed.append((spot, radius))
+      text += line(shape, COLOR_NAMES[len(placed) % 10], *spot, rng.uniform(0, 180))
+  if seed % 2 == 0:
+    side = rng.choice((-1, 1))
+    return text + f'occluder 0 {0.3 * side: .3f}  0.000 0.490 0\n'
+  y1, y2 = rng.uniform(-0.06, 0.06, size=2)
+  return text + (f'occluder 1  0.275 {y1: .3f} 0.470 0\n'
+                 f'occluder 2 -0.275 {y2: .3f} 0.470 0\n')
+
+
+def passing(draw, tries: int = 10) -> str:
+  """The first case `draw(try)` gives that passes mvcoba-eval's load check."""
+  config = resolve('default')
+  for attempt in range(tries):
+    text = draw(attempt)
+    with tempfile.TemporaryDirectory() as folder:
+      path = pathlib.Path(folder) / 'case.scn'
+      path.write_text(text)
+      if not evaluation.case_problems([read_case(path)], config):
+        return text
+  raise RuntimeError(f'no case of {tries} draws passes the load check')
+
+
+def validation_suites(cases: int = 6) -> dict[str, list[str]]:
+  """Cases of each kind drawn apart from the shipped suites, to choose training settings on
+  without tuning to the suites the results are reported on."""
+  return {
+      'val-random': [passing(lambda tries, n=n, seed=seed: heap_on_table(
+                         n, VALIDATION_SEED + seed + 100 * tries))
+                     for seed, n in enumerate(np.linspace(16, 36, cases).round().astype(int))],
+      'val-ordered': [packed_case(seed) for seed in range(cases)],
+      'val-occluded': [occluded_case(seed) for seed in range(cases)],
+  }
+
+
 def suites() -> dict[str, list[str]]:
   """Suite name -> the text of each of its case files."""
   return {
@@ -227,11 +319,21 @@ def suites() -> dict[str, list[str]]:
   }
 
 
-def main():
+def main(argv=None):
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument('--validation', metavar='DIR',
+                      help='write the validation suites (val-random, val-ordered, val-occluded) '
+                           'under DIR instead of the shipped suites')
+  parser.add_argument('--cases', type=int, default=6, help='validation cases per suite')
+  args = parser.parse_args(argv)
   runtime.setup()
-  for suite, cases in suites().items():
-    folder = SUITES_DIR / suite
-    folder.mkdir(exist_ok=True)
+  if args.validation:
+    written, root = validation_suites(args.cases), pathlib.Path(args.validation)
+  else:
+    written, root = suites(), SUITES_DIR
+  for suite, cases in written.items():
+    folder = root / suite
+    folder.mkdir(parents=True, exist_ok=True)
     for i, text in enumerate(cases):
       (folder / f'{suite}-{i:02d}.scn').write_text(text)
       print(folder / f'{suite}-{i:02d}.scn')

@@ -304,3 +304,15 @@ def test_losses_name_the_action_and_where_the_object_was():
   assert record['gripper_xy'] == pytest.approx([half, half], abs=1e-4)
   assert record['distance_to_gripper'] == pytest.approx(np.hypot(0.2 - half, 0.05 + half), abs=1e-4)
   assert record['margin_to_border'] == pytest.approx(config.scene.workspace_half - 0.2, abs=1e-4)
+
+
+def test_tables_refuse_a_folder_given_twice_and_tell_folders_of_one_name_apart(tmp_path, capsys):
+  for parent in 'xy':
+    (tmp_path / parent).mkdir()
+    _results(tmp_path / parent / 'eval', 'ordered', 'mvcoba', {'c0': [(4, 4, 4, 4, 4, 0, True)]})
+  a, b = str(tmp_path / 'x' / 'eval'), str(tmp_path / 'y' / 'eval')
+  assert eval_cli.main(['--tables', a, a, '--out', str(tmp_path / 'j')]) == 2
+  assert 'given twice' in capsys.readouterr().err
+  assert eval_cli.main(['--tables', a, b, '--out', str(tmp_path / 'j')]) == 0
+  rows = json.loads((tmp_path / 'j' / 'results.json').read_text())['ordered']
+  assert list(rows) == ['mvcoba', 'mvcoba (y/eval)']

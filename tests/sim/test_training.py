@@ -1,5 +1,6 @@
 """The jitted training step, the learner, and mvcoba-train end to end on the tiny preset."""
 import json
+import shutil
 import signal
 import subprocess
 import sys
@@ -86,7 +87,7 @@ def test_acting_target_stores_the_next_forward_and_learns_from_it():
   first, _ = step(state, *args)
   assert int(first.replay.size) == 0 and bool(first.pending_valid)
   q = trainer.q_maps(first.params, first.obs)
-  expected = agent.future_value(q, first.changed, trainer.method)
+  expected = agent.future_value(q, first.changed, trainer.method, trainer.config.train)
   second, _ = step(first, *args)
   b = trainer.config.num_envs
   assert int(second.replay.size) == b
@@ -230,8 +231,14 @@ def test_sweep_of_methods_and_seeds_trains_evaluates_and_aggregates(tmp_path, ca
   case = tmp_path / 'case.scn'
   case.write_text('cube red 0.0 0.0 0\nflat_box blue 0.1 0.1 0\n')
   out = tmp_path / 'eval'
-  assert eval_cli.main(['--checkpoint', *(str(sweep / r) for r in runs), '--suite', str(case),
+  # The same run from a second folder of the same name: a row of its own, not pooled as a seed.
+  shutil.copytree(sweep / 'mvcoba-s1', tmp_path / 'copy' / 'mvcoba-s1')
+  assert eval_cli.main(['--checkpoint', *(str(sweep / r) for r in runs),
+                        str(tmp_path / 'copy' / 'mvcoba-s1'), '--suite', str(case),
                         '--runs', '2', '--max-actions', '2', '--out', str(out)]) == 0
+  rows = json.loads((out / 'results.json').read_text())['case']
+  assert 'mvcoba (sweep/mvcoba-s1)' in rows and 'mvcoba (copy/mvcoba-s1)' in rows
+  assert rows['mvcoba (copy/mvcoba-s1)']['settings']['training_seed'] == 1
   text = (out / 'results.md').read_text()
   assert 'over training seeds, mean [95% CI]' in text
   assert '| mvcoba | 2 |' in text and '| grasp_only | 2 |' in text

@@ -91,3 +91,39 @@ def test_separations_name_only_the_pairs_whose_intervals_are_disjoint():
   text = paper.separations(ours)
   assert '- grasp success: MV-COBA > VPG\n' in text  # DRGP's interval overlaps both
   assert '- completion: no two methods distinguishable' in text
+
+
+def test_folders_of_one_name_get_labels_of_their_own(tmp_path):
+  a, b = tmp_path / 'a' / 'runs' / 'train', tmp_path / 'b' / 'runs' / 'train'
+  labels = report.row_labels([str(a), str(b), str(tmp_path / 'v')], ['mvcoba', 'mvcoba', 'vpg'])
+  assert labels == ['mvcoba (a/runs/train)', 'mvcoba (b/runs/train)', 'vpg']
+  sweep = [str(tmp_path / 'sweep' / f'mvcoba-s{s}') for s in (0, 1)]
+  assert report.row_labels(sweep, ['mvcoba'] * 2) == ['mvcoba (mvcoba-s0)', 'mvcoba (mvcoba-s1)']
+  with pytest.raises(report.ResultsError, match='given twice'):
+    report.row_labels([str(a), f'{a}/../train'], ['mvcoba', 'mvcoba'])
+
+
+def test_intervals_pool_only_seeds_of_one_training_config():
+  """Two configs of one method are two groups, each named by the fields where it differs from
+  the value most configs hold (the first met on a tie); the seeds of one config pool into one
+  interval, and a seed met again is a group of its own."""
+  def row(grasp, gamma, seed):
+    cases = {c: {key: grasp + i for key, _ in report.METRICS} for i, c in enumerate('ab')}
+    training = {'train': {'gamma': gamma, 'batch_size': 8}, 'network': {'method': 'mvcoba'}}
+    return {'cases': cases, 'mean': {}, 'settings': {'training': training, 'training_seed': seed}}
+  rows = {'mvcoba (x/s0)': row(70.0, 0.5, 0), 'mvcoba (x/s1)': row(72.0, 0.5, 1),
+          'mvcoba (y/s0)': row(90.0, 0.2, 0), 'mvcoba (y/s1)': row(92.0, 0.2, 1),
+          'mvcoba (old)': {'cases': row(1.0, 0, 0)['cases'], 'mean': {}},
+          'mvcoba (copy/s1)': row(99.0, 0.2, 1)}
+  groups = report.training_groups(rows)
+  assert groups == {'mvcoba': ['mvcoba (x/s0)', 'mvcoba (x/s1)'],
+                    'mvcoba {train.gamma=0.2}': ['mvcoba (y/s0)', 'mvcoba (y/s1)'],
+                    'mvcoba {training config not recorded}': ['mvcoba (old)'],
+                    'mvcoba {train.gamma=0.2, seeds met again (1)}': ['mvcoba (copy/s1)']}
+  over = report.seed_intervals(rows)
+  assert list(over) == ['mvcoba', 'mvcoba {train.gamma=0.2}']
+  assert over['mvcoba {train.gamma=0.2}']['grasp_success'][0] == pytest.approx(91.5)
+  from mvcoba_jax import paper
+  text = paper.comparisons({'ordered': rows})
+  assert '| MV-COBA (mvcoba {train.gamma=0.2}) | 2 | 91.5 [' in text and '| 86.3 |' in text
+  assert 'MV-COBA {train.gamma=0.2} > MV-COBA' in text

@@ -1,0 +1,98 @@
+"""The recipe study of MV-COBA (docs/results/recipe.md): each change of the learning recipe alone
+from the paper's text, and the authors' whole recipe, trained over seeds and evaluated on the
+validation suites (generated apart from the shipped ones), each step resumable.
+
+  python experiments/recipe_study.py [--variants NAME ...] [--seeds 0 1] [--runs 3]
+                                     [--workdir runs/recipe] [--suites DIR ...]
+
+Every run trains with `mvcoba-train` into WORKDIR/VARIANT/mvcoba-sSEED and is evaluated with
+`mvcoba-eval` into WORKDIR/eval/VARIANT-sSEED; a run already trained or evaluated is passed over,
+so the study continues where a killed one stopped. Then `mvcoba-eval --tables` joins every
+evaluation into WORKDIR/tables, whose rows group by training config: one interval per variant
+over its seeds. Each command, its commit and its wall time go to WORKDIR/study.jsonl.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import subprocess
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+VALIDATION = ROOT / 'docs' / 'results' / 'recipe' / 'validation'
+
+# variant -> mvcoba-train arguments on top of the default preset (the paper's text)
+VARIANTS = {
+    'paper_text': ['--config', 'paper_text'],
+    'targets': ['--set', 'train.bootstrap_no_change=false', '--set', 'train.failed_grasp_reward=0'],
+    'authors': ['--config', 'authors'],
+    'heap': ['--set', 'env.drop=heap'],
+    'fresh': ['--set', 'train.fresh_in_batch=true'],
+    'symmetry': ['--set', 'train.grasp_symmetry=true'],
+    'future_both': ['--set', 'train.future_max=both'],
+    'push_penalty': ['--set', 'train.no_change_push_reward=-1'],
+    'occlusion': ['--set', 'env.occluded_share=0.25'],
+}
+
+
+def commit() -> str:
+  head = subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], cwd=ROOT, capture_output=True,
+                        text=True).stdout.strip()
+  dirty = subprocess.run(['git', 'status', '--porcelain', '--untracked-files=no'], cwd=ROOT,
+                         capture_output=True, text=True).stdout.strip()
+  return head + ('+changes' if dirty else '')
+
+
+def run(command: list[str], log: pathlib.Path, what: str) -> bool:
+  """Runs a command with its output in `log`'s folder; records it in `log`; True on success."""
+  out = log.parent / f'{what}.log'
+  start = time.time()
+  with open(out, 'w') as f:
+    code = subprocess.call(command, stdout=f, stderr=subprocess.STDOUT, cwd=ROOT)
+  with open(log, 'a') as f:
+    f.write(json.dumps({'what': what, 'command': command, 'commit': commit(), 'rc': code,
+                        'wall_s': round(time.time() - start, 1), 'ended': time.ctime()}) + '\n')
+  print(f'{what}: rc {code} in {time.time() - start:.0f} s ({out})', flush=True)
+  return code == 0
+
+
+def main(argv=None) -> int:
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument('--variants', nargs='+', default=list(VARIANTS), choices=list(VARIANTS))
+  parser.add_argument('--seeds', nargs='+', type=int, default=[0, 1])
+  parser.add_argument('--runs', type=int, default=3, help='evaluation runs per case')
+  parser.add_argument('--workdir', default='runs/recipe')
+  parser.add_argument('--suites', nargs='+', default=[str(VALIDATION / s) for s in
+                                                      ('val-random', 'val-ordered',
+                                                       'val-occluded')])
+  args = parser.parse_args(argv)
+  work = (ROOT / args.workdir).resolve()
+  work.mkdir(parents=True, exist_ok=True)
+  log = work / 'study.jsonl'
+  evaluations = []
+  for seed in args.seeds:  # every variant's first seed before any second
+    for variant in args.variants:
+      name = f'{variant}-s{seed}'
+      train_dir, eval_dir = work / variant / f'mvcoba-s{seed}', work / 'eval' / name
+      if not (train_dir / 'eval_summary.json').is_file():
+        if not run(['mvcoba-train', *VARIANTS[variant], '--seed', str(seed), '--workdir',
+                    str(train_dir), '--eval-actions', '1']
+                   + (['--resume'] if (train_dir / 'checkpoints').is_dir() else []),
+                   log, f'train-{name}'):
+          continue
+      if not (eval_dir / 'results.json').is_file() or not (eval_dir / 'done').is_file():
+        if not run(['mvcoba-eval', '--checkpoint', str(train_dir), '--suite', *args.suites,
+                    '--runs', str(args.runs), '--out', str(eval_dir), '--resume'],
+                   log, f'eval-{name}'):
+          continue
+        (eval_dir / 'done').touch()
+      evaluations.append(str(eval_dir))
+  if evaluations:
+    run(['mvcoba-eval', '--tables', *evaluations, '--out', str(work / 'tables')], log, 'tables')
+  return 0
+
+
+if __name__ == '__main__':
+  sys.exit(main())
