@@ -26,7 +26,7 @@ PLACEMENT_GAP = 0.004  # clearance between footprint circles of objects dropped 
 # hides the whole workspace and slot 1 a part, as in the occluded suite's cases.
 OCCLUDE_WHOLE = (0.857, 0.0, 0.49)
 OCCLUDE_PART = (0.786, 0.036, 0.47)
-PART_SHIFT = 0.06  # the partial occluder's sideways shift is drawn from [-this, this] (m)
+PART_SHIFT = 0.02  # the partial occluder goes to either side, shifted by up to this (m)
 
 
 @struct.dataclass
@@ -189,8 +189,8 @@ class Tabletop:
 
   def drawn_occluders(self, key):
     """Occluder poses of a random drop: with probability `env.occluded_share`, one camera (drawn)
-    hidden wholly by slot 0 or, with a second slot, as often partly by slot 1 shifted sideways
-    (`OCCLUDE_WHOLE`, `OCCLUDE_PART`); every other slot parked."""
+    hidden wholly by slot 0 or, with a second slot, as often partly by slot 1 on a drawn side
+    (`OCCLUDE_WHOLE`, `OCCLUDE_PART`, `PART_SHIFT`); every other slot parked."""
     pos, quat = self.parked_occluders()
     share = self.config.env.occluded_share
     if share == 0:
@@ -200,9 +200,10 @@ class Tabletop:
     camera = cameras[jax.random.randint(k_camera, (), 0, len(cameras))]
     part = (jax.random.bernoulli(k_part) if len(self.config.scene.occluders) > 1
             else jnp.bool_(False))
+    k_side, k_shift = jax.random.split(k_shift)
     shift = jax.random.uniform(k_shift, (), minval=-PART_SHIFT, maxval=PART_SHIFT)
     along, side, height = (jnp.where(part, p, w) for p, w in zip(OCCLUDE_PART, OCCLUDE_WHOLE))
-    side = side + jnp.where(part, shift, 0.0)
+    side = jnp.where(part, jnp.where(jax.random.bernoulli(k_side), side, -side) + shift, 0.0)
     azimuth = jnp.arctan2(camera[1], camera[0])
     c, s = jnp.cos(azimuth), jnp.sin(azimuth)
     along = along * jnp.hypot(camera[0], camera[1])
