@@ -49,7 +49,8 @@ def step_cost(suite: str, repeats: int) -> dict:
   def action(states, key):
     obs = task.observe(env, states)
     chosen = policy(obs, jnp.ones(n, bool), jax.random.split(key, n))
-    return task.step(env, (0, 1), states, obs, jnp.zeros(n, jnp.int32), chosen)
+    return task.step(env, (0, 1), states, obs, jnp.zeros(n, jnp.int32), chosen,
+                     config.train)
 
   emptied = jax.jit(jax.vmap(env.emptied))(states)
   times = {'full': [], 'emptied': []}

@@ -4,7 +4,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from mvcoba_jax import task
+from mvcoba_jax import agent, task
+from mvcoba_jax.config import resolve
 from mvcoba_jax.agent import PixelAction
 from mvcoba_jax.sim.geometry import world_to_pixel
 from mvcoba_jax.sim.primitives import GRASP, PUSH
@@ -29,10 +30,19 @@ def test_rewards_failures_and_episode_ends():
   rows = [(GRASP, 0, *cube), (GRASP, 0, *empty), (GRASP, 0, *empty), (PUSH, 0, *behind)]
   action = PixelAction(*(jnp.asarray(c, jnp.int32) for c in zip(*rows)))
   failures = jnp.asarray([0, 2, 0, 0], jnp.int32)
-  _, next_obs, out = jax.jit(lambda s, o, f, a: task.step(env, (0, 1), s, o, f, a))(
+  _, next_obs, out = jax.jit(lambda s, o, f, a: task.step(env, (0, 1), s, o, f, a,
+                                                          env.config.train))(
       states, obs, failures, action)
   np.testing.assert_array_equal(np.asarray(out.info.grasp_success), [True, False, False, False])
   np.testing.assert_array_equal(np.asarray(out.reward), [1.0, 0.0, 0.0, 0.5])
+  # The same transitions under the authors' rewards (a failed grasp 0 even where it changed the
+  # scene, a push that changes nothing -1), and the paper text's 0.5 for such a grasp.
+  authors = resolve('authors').train
+  np.testing.assert_array_equal(np.asarray(agent.reward(
+      action.primitive, out.info.grasp_success, out.changed, authors)), [1.0, 0.0, 0.0, 0.5])
+  assert float(agent.reward(PUSH, False, False, authors)) == -1.0
+  assert float(agent.reward(GRASP, False, True, authors)) == 0.0
+  assert float(agent.reward(GRASP, False, True, env.config.train)) == 0.5
   np.testing.assert_array_equal(np.asarray(out.changed), [True, False, False, True])
   np.testing.assert_array_equal(np.asarray(out.failures), [0, 3, 1, 0])
   np.testing.assert_array_equal(np.asarray(out.cleared), [True, False, False, False])

@@ -268,3 +268,63 @@ def test_reproduction_trains_evaluates_and_sets_ours_beside_the_paper(tmp_path, 
   printed = capsys.readouterr().out
   assert printed.count('finished already') == 2 and printed.count('kept from') == 2
   assert json.loads((out / 'results.json').read_text()) == results
+
+
+AUTHORS_RECIPE = ['train.failed_grasp_reward=0', 'train.no_change_push_reward=-1',
+                  'train.bootstrap_no_change=false', 'train.future_max=both',
+                  'train.grasp_symmetry=true', 'train.fresh_in_batch=true',
+                  'train.steps_per_iteration=1', 'train.epsilon_start=1', 'train.epsilon_end=1']
+
+
+def test_authors_recipe_on_real_transitions():
+  """The authors' rewards and targets on transitions of real training steps (random actions):
+  failed grasps earn 0 and pushes that change nothing -1, an action that changed nothing stores
+  no future, the future is the max over both primitives; a grasp's loss also labels its
+  rotation turned half way, and an update trains on the fresh transitions too."""
+  trainer = Trainer(resolve(TINY, AUTHORS_RECIPE))
+  t = trainer.config.train
+  step = jax.jit(trainer.iterate)
+  state = jax.jit(trainer.init)(jax.random.PRNGKey(2))
+  logs = []
+  for _ in range(6):
+    before = state
+    state, log = step(state, jnp.bool_(True), jnp.float32(-1.0))
+    logs.append(jax.tree.map(lambda x: np.asarray(x)[0], log))
+  b = trainer.config.num_envs
+  data = jax.tree.map(lambda x: np.asarray(x)[:int(state.replay.size)], state.replay.data)
+  assert len(data.reward) == 5 * b  # the sixth step's transitions are still pending
+  log = jax.tree.map(lambda *x: np.concatenate(x) if np.ndim(x[0]) else np.stack(x), *logs[:5])
+  np.testing.assert_array_equal(data.primitive, log.primitive)
+  np.testing.assert_array_equal(data.reward, np.asarray(agent.reward(
+      log.primitive, log.grasp_success, log.changed, t)))
+  assert set(data.reward[log.primitive == agent.GRASP]) <= {0.0, 1.0}
+  assert set(data.reward[log.primitive == agent.PUSH]) <= {-1.0, 0.5}
+  np.testing.assert_array_equal(data.done, ~log.changed)  # no future where nothing changed
+  assert (~log.changed).any() and log.changed.any()
+  # The last stored transitions' future: the max over both maps of the step that stored them.
+  q = trainer.q_maps(before.params, before.obs)
+  np.testing.assert_allclose(data.next_value[-b:], np.asarray(q).reshape(b, -1).max(axis=1),
+                             rtol=1e-5)
+  # The loss: a grasp is labelled at its rotation and at that rotation turned half way.
+  batch = jax.tree.map(lambda x: jnp.asarray(x[-b:]), state.replay.data)
+  batch = batch.replace(obs=replay_lib._unpack(batch.obs), next_obs=replay_lib._unpack(batch.next_obs),
+                        primitive=jnp.asarray([agent.GRASP, agent.PUSH]))
+  valid = jnp.ones(b, bool)
+  loss, _ = trainer.loss(state.params, state.target_params, batch, valid)
+  k = trainer.config.env.num_rotations
+  y = agent.bootstrap(batch.next_value, batch.done, batch.reward, t)
+  at = lambda rotation: networks.executed_q(trainer.q_maps(state.params, batch.obs,
+                                                           rotation[:, None]),
+                                            batch.primitive, batch.row, batch.col)
+  huber = lambda pred: networks.huber_loss(pred, y, t.huber_delta)
+  turned = huber(at((batch.rotation + k // 2) % k))
+  expected = jnp.sum(huber(at(batch.rotation))) + turned[0]  # the push (index 1) is not turned
+  np.testing.assert_allclose(float(loss), float(expected), rtol=1e-4)
+  # An update with the fresh transitions trains on the replayed batch and on them.
+  key = jax.random.PRNGKey(4)
+  _, sampled, _ = replay_lib.sample(state.replay, key, t.batch_size, t.priority_exponent)
+  both = jax.tree.map(lambda a, c: jnp.concatenate([a, c.astype(a.dtype)]), sampled, batch)
+  whole, _ = trainer.loss(state.params, state.target_params, both,
+                          jnp.ones(t.batch_size + b, bool))
+  _, mean_loss = jax.jit(trainer.update)(state, key, True, (batch, jnp.bool_(True)))
+  np.testing.assert_allclose(float(mean_loss), float(whole) / (t.batch_size + b), rtol=1e-4)

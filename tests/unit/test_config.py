@@ -49,6 +49,11 @@ def test_presets_are_valid(preset):
     ('network.method=nope', "network.method='nope': allowed values are"),
     ('train.epsilon_end=0.9', 'must not exceed train.epsilon_start'),
     ('num_envs=4096', 'GiB of feature maps per acting forward'),
+    ('env.drop=pile', "env.drop='pile': allowed values are spread, heap"),
+    ('env.heap_half=0.3', 'env.heap_half=0.3 must not exceed scene.workspace_half'),
+    ('env.occluded_share=1.5', 'env.occluded_share=1.5: allowed range [0, 1]'),
+    ('train.future_max=all', "train.future_max='all': allowed values are rule, both"),
+    ('train.no_change_push_reward=-2', 'train.no_change_push_reward=-2.0: allowed range'),
 ])
 def test_bad_override_is_refused_naming_the_key(assignment, says):
   with pytest.raises(ConfigError) as error:
@@ -120,6 +125,30 @@ def test_saved_config_without_a_newer_field_gets_what_its_run_used():
   del saved['train']['target']
   config = from_dict(saved)
   assert config.train.target == 'network' and defaulted(saved, config) == {}
+
+
+def test_saved_config_without_the_recipe_fields_keeps_the_paper_text_recipe():
+  """Runs saved before the recipe fields existed trained with the paper's text: they load with
+  those values, without a warning, whatever the presets now choose."""
+  saved = to_dict(resolve('authors'))
+  for name in ('failed_grasp_reward', 'no_change_push_reward', 'bootstrap_no_change',
+               'future_max', 'grasp_symmetry', 'fresh_in_batch'):
+    del saved['train'][name]
+  del saved['env']['drop'], saved['env']['occluded_share']
+  config = from_dict(saved)
+  assert config.train == resolve('paper_text').train and config.env.drop == 'spread'
+  assert config.env.occluded_share == 0 and defaulted(saved, config) == {}
+
+
+def test_recipe_settings_that_do_not_fit_together_are_refused():
+  with pytest.raises(ConfigError, match='grasp_symmetry needs an even env.num_rotations'):
+    resolve('default', ['train.grasp_symmetry=true', 'env.num_rotations=7'])
+  import dataclasses
+
+  from mvcoba_jax.config import validate
+  config = resolve('tiny', ['env.occluded_share=0.5'])
+  with pytest.raises(ConfigError, match='needs an occluder slot'):
+    validate(dataclasses.replace(config, scene=dataclasses.replace(config.scene, occluders=())))
 
 
 def test_evaluation_overrides_change_physics_not_what_training_fixed():
