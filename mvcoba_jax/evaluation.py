@@ -73,6 +73,11 @@ class Runs:
   failures: jnp.ndarray  # consecutive failed actions
   finished: jnp.ndarray
   completed: jnp.ndarray
+  # Failed actions since the scene last changed (N, F, 4: primitive, rotation, row, col), the
+  # first `tried` of them, and the actions that repeated one of them exactly.
+  failed: jnp.ndarray
+  tried: jnp.ndarray
+  repeated_failures: jnp.ndarray
   trace: Trace | None = None
 
 
@@ -116,7 +121,9 @@ def begin(env: Tabletop, views: tuple[int, ...], layouts: Layout, keys, max_acti
   zeros = jnp.zeros(n, jnp.int32)
   runs = Runs(actions=zeros, grasp_attempts=zeros, grasp_successes=zeros, picked=zeros,
               lost=zeros, objects=jnp.sum(states.in_play, axis=1, dtype=jnp.int32),
-              failures=zeros, finished=jnp.zeros(n, bool), completed=jnp.zeros(n, bool))
+              failures=zeros, finished=jnp.zeros(n, bool), completed=jnp.zeros(n, bool),
+              failed=jnp.zeros((n, env.config.env.max_failures + 1, 4), jnp.int32),
+              tried=zeros, repeated_failures=zeros)
   if record:
     nothing = agent.PixelAction(zeros, zeros, zeros, zeros)
     shapes = jax.eval_shape(lambda s, a: jax.vmap(env.step)(s, a)[1], states,
@@ -157,12 +164,14 @@ def advance(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch,
     count = lambda total, x: total + jnp.where(active, x, 0).astype(jnp.int32)
     is_grasp = action.primitive == agent.GRASP
     picked = count(runs.picked, info.picked)
+    failed, tried, repeated = _repeats(runs, action, out, active)
     runs = runs.replace(
         actions=count(runs.actions, 1), grasp_attempts=count(runs.grasp_attempts, is_grasp),
         grasp_successes=count(runs.grasp_successes, info.grasp_success), picked=picked,
         lost=count(runs.lost, info.lost), failures=jnp.where(active, out.failures, runs.failures),
         finished=runs.finished | out.done,
-        completed=runs.completed | (active & out.cleared & (picked == runs.objects)))
+        completed=runs.completed | (active & out.cleared & (picked == runs.objects)),
+        failed=failed, tried=tried, repeated_failures=count(runs.repeated_failures, repeated))
     if record:
       runs = runs.replace(trace=jax.tree.map(
           lambda buf, x: buf.at[:, batch.t].set(x), runs.trace,
@@ -181,6 +190,24 @@ def advance(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch,
     return (still > 0) & (still > until) & (batch.t < max_actions)
 
   return jax.lax.while_loop(going, body, batch)
+
+
+def _repeats(runs: Runs, action: agent.PixelAction, out: task.Outcome, active):
+  """The failed actions since the scene last changed, with this one's outcome, and whether
+  this action repeated one of them exactly (B,). A run ends after `env.max_failures` + 1 failed
+  actions in a row, so the list never holds more."""
+  this = jnp.stack([action.primitive, action.rotation, action.row, action.col], axis=-1)
+  slots = jnp.arange(runs.failed.shape[1])
+  repeated = jnp.any((slots < runs.tried[:, None])
+                     & jnp.all(runs.failed == this[:, None], axis=-1), axis=-1)
+  failed_here = agent.failed(action.primitive, out.info.grasp_success, out.changed)
+  kept = failed_here & ~out.changed & active
+  at = jnp.minimum(runs.tried, slots.size - 1)
+  failed = jnp.where(kept[:, None, None],
+                     runs.failed.at[jnp.arange(this.shape[0]), at].set(this), runs.failed)
+  tried = jnp.where(active & out.changed, 0,
+                    jnp.where(kept, jnp.minimum(runs.tried + 1, slots.size), runs.tried))
+  return failed, tried, repeated & active
 
 
 def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Layout, keys,
@@ -220,7 +247,8 @@ def run_logs(runs: Runs) -> list[RunLog]:
   r = jax.tree.map(lambda x: x.tolist(), runs)
   return [RunLog(actions=r.actions[i], grasp_attempts=r.grasp_attempts[i],
                  grasp_successes=r.grasp_successes[i], objects=r.objects[i], picked=r.picked[i],
-                 lost=r.lost[i], completed=r.completed[i]) for i in range(len(r.actions))]
+                 lost=r.lost[i], completed=r.completed[i],
+                 repeated_failures=r.repeated_failures[i]) for i in range(len(r.actions))]
 
 
 def losses(trace: Trace, names: list[str], config: Config) -> list[dict]:

@@ -20,6 +20,9 @@ class RunLog:
   picked: int
   lost: int
   completed: bool
+  # Actions that repeated a failed action of the run exactly (primitive, rotation and cell) with
+  # nothing changed since; None in results written before it was counted.
+  repeated_failures: int | None = None
 
 
 def case_metrics(runs: list[RunLog]) -> dict:
@@ -31,7 +34,11 @@ def case_metrics(runs: list[RunLog]) -> dict:
   objects picked = objects picked / objects in the case, over all runs: the paper's text defines
     its completion rate this way (section 5.4; its per-case figures such as 81.2 and 82.5 are no
     share of 5 runs), so this is the column to hold against the paper's completion;
-  grasp-to-push ratio = grasp attempts / pushes (inf when nothing was pushed).
+  grasp-to-push ratio = grasp attempts / pushes (inf when nothing was pushed);
+  grasp success and action efficiency per completed run: the paper's averages (the authors'
+    evaluate.py): each completed run's own rate, averaged over the completed runs (NaN if none);
+  repeated failures = actions that repeated a failed action exactly, per run (NaN where not
+    counted).
   """
   attempts = sum(r.grasp_attempts for r in runs)
   successes = sum(r.grasp_successes for r in runs)
@@ -46,16 +53,28 @@ def case_metrics(runs: list[RunLog]) -> dict:
       'objects_picked': (100.0 * sum(r.picked for r in runs) / sum(r.objects for r in runs)
                          if any(r.objects for r in runs) else float('nan')),
       'grasp_to_push': attempts / pushes if pushes else float('inf'),
+      'grasp_success_per_run': (100.0 * float(np.mean([r.grasp_successes / r.grasp_attempts
+                                                      for r in completed]))
+                                if completed and all(r.grasp_attempts for r in completed)
+                                else float('nan')),
+      'action_efficiency_per_run': (100.0 * float(np.mean([r.objects / r.actions
+                                                          for r in completed]))
+                                    if completed and all(r.actions for r in completed)
+                                    else float('nan')),
+      'repeated_failures': (float(np.mean([r.repeated_failures for r in runs]))
+                            if runs and all(r.repeated_failures is not None for r in runs)
+                            else float('nan')),
       'runs': len(runs), 'actions': actions,
   }
 
 
 def suite_average(per_case: dict[str, dict]) -> dict:
   """Mean of each metric over the cases (NaN cases are skipped, as a missing table cell)."""
-  keys = ('grasp_success', 'action_efficiency', 'completion', 'objects_picked', 'grasp_to_push')
+  keys = ('grasp_success', 'action_efficiency', 'completion', 'objects_picked', 'grasp_to_push',
+          'grasp_success_per_run', 'action_efficiency_per_run', 'repeated_failures')
   out = {}
   for k in keys:
-    values = np.array([m[k] for m in per_case.values()], float)
+    values = np.array([m.get(k, np.nan) for m in per_case.values()], float)
     finite = values[np.isfinite(values)]
     out[k] = float(finite.mean()) if finite.size else float('nan')
   return out

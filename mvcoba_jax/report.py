@@ -14,7 +14,10 @@ from mvcoba_jax import intervals, metrics
 
 METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action efficiency (%)'),
            ('completion', 'completion (%)'), ('objects_picked', 'objects picked (%)'),
-           ('grasp_to_push', 'grasp-to-push ratio'))
+           ('grasp_to_push', 'grasp-to-push ratio'),
+           ('grasp_success_per_run', 'grasp success, mean per completed run (%)'),
+           ('action_efficiency_per_run', 'action efficiency, mean per completed run (%)'),
+           ('repeated_failures', 'repeated failed actions per run'))
 
 
 class ResultsError(ValueError):

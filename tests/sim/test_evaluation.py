@@ -8,7 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from mvcoba_jax import evaluation, metrics, perception, video, viz
+from mvcoba_jax import agent, evaluation, metrics, perception, video, viz
 from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.config import resolve
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts
@@ -316,3 +316,20 @@ def test_tables_refuse_a_folder_given_twice_and_tell_folders_of_one_name_apart(t
   assert eval_cli.main(['--tables', a, b, '--out', str(tmp_path / 'j')]) == 0
   rows = json.loads((tmp_path / 'j' / 'results.json').read_text())['ordered']
   assert list(rows) == ['mvcoba', 'mvcoba (y/eval)']
+
+
+def test_repeated_failed_actions_are_counted_per_run(setup):
+  """A policy that grasps at one bare corner every time fails the same way until the failure
+  rule ends the run: every action after the first repeats a failed action with nothing changed
+  in between. The heuristic, whose rotation is drawn anew, repeats nothing exactly here."""
+  _, env, _, layouts, keys, heuristic = setup
+  zeros = lambda obs: jnp.zeros(obs.depth.shape[0], jnp.int32)
+  stubborn = lambda obs, changed, keys: agent.PixelAction(
+      primitive=zeros(obs) + agent.GRASP, rotation=zeros(obs), row=zeros(obs), col=zeros(obs))
+  runs = evaluation.evaluate(env, stubborn, (0, 1), layouts, keys, 10)
+  logs = evaluation.run_logs(runs)
+  attempts = env.config.env.max_failures + 1
+  assert [r.actions for r in logs] == [attempts] * 2
+  assert [r.repeated_failures for r in logs] == [attempts - 1] * 2
+  assert metrics.case_metrics(logs)['repeated_failures'] == attempts - 1
+  assert all(r.repeated_failures == 0 for r in evaluation.run_logs(heuristic))
