@@ -1,4 +1,5 @@
-"""Acting and learning rules shared by every method: action choice, rewards, Q-learning targets.
+"""Acting and learning rules shared by every method: action choice, rewards, Q-learning targets,
+the loss on executed actions and the optimiser (training and online evaluation share them).
 
 Q maps are (B, 2, K, R, R): primitive (PUSH 0, GRASP 1), rotation, heightmap row and column.
 """
@@ -6,9 +7,10 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import optax
 from flax import struct
 
-from mvcoba_jax import methods, suppression
+from mvcoba_jax import methods, networks, suppression
 from mvcoba_jax.config import Config, TrainConfig
 from mvcoba_jax.sim.geometry import pixel_to_world
 from mvcoba_jax.sim.primitives import GRASP, PUSH, Action
@@ -136,3 +138,37 @@ def epsilon_at(actions, train: TrainConfig):
   """Linear decay from epsilon_start to epsilon_end over epsilon_decay_actions actions."""
   frac = jnp.clip(actions / max(train.epsilon_decay_actions, 1), 0.0, 1.0)
   return train.epsilon_start + frac * (train.epsilon_end - train.epsilon_start)
+
+
+def optimizer(train: TrainConfig) -> optax.GradientTransformation:
+  """SGD with momentum and weight decay, the paper's optimiser."""
+  return optax.chain(optax.add_decayed_weights(train.weight_decay),
+                     optax.sgd(train.learning_rate, momentum=train.momentum))
+
+
+def executed_loss(q_maps, params, batch, y, valid, config: Config):
+  """Huber loss of Q at each transition's executed pixel against its target `y` (N,), summed
+  over the `valid` ones; also the TD errors (N,). `q_maps(params, obs, rotations (N, K))`.
+
+  Summed, not averaged: each transition then moves the parameters as much as one of VPG's
+  single-transition steps at the paper's learning rate. The mean made a batch of B worth one
+  such step: learning per action was 16 times slower than VPG's (issue #4, first default run).
+  With `train.grasp_symmetry` a grasp's target also labels its rotation turned half way, in
+  the same forward (two rotations per transition).
+  """
+  t = config.train
+  y = jax.lax.stop_gradient(y)
+  weight = valid.astype(jnp.float32)
+  if not t.grasp_symmetry:
+    q = q_maps(params, batch.obs, batch.rotation[:, None])
+    pred = networks.executed_q(q, batch.primitive, batch.row, batch.col)
+    return jnp.sum(networks.huber_loss(pred, y, t.huber_delta) * weight), pred - y
+  k = config.env.num_rotations
+  turned = (batch.rotation + k // 2) % k
+  q = q_maps(params, batch.obs, jnp.stack([batch.rotation, turned], axis=1))
+  pred, pred_turned = (networks.executed_q(q[:, :, i:i + 1], batch.primitive, batch.row,
+                                           batch.col) for i in (0, 1))
+  is_grasp = (batch.primitive == GRASP).astype(jnp.float32)
+  per = (networks.huber_loss(pred, y, t.huber_delta)
+         + is_grasp * networks.huber_loss(pred_turned, y, t.huber_delta))
+  return jnp.sum(per * weight), pred - y

@@ -12,14 +12,16 @@ from __future__ import annotations
 import collections
 import dataclasses
 import functools
-from typing import Callable
+from typing import Any, Callable
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+import optax
 from flax import nnx, struct
 
 from mvcoba_jax import agent, networks, perception, task
+from mvcoba_jax import replay as replay_lib
 from mvcoba_jax.config import Config
 from mvcoba_jax.metrics import RunLog
 from mvcoba_jax.sim.geometry import pixel_to_world, quat_mul, yaw_quat
@@ -79,6 +81,7 @@ class Runs:
   tried: jnp.ndarray
   repeated_failures: jnp.ndarray
   trace: Trace | None = None
+  learner: Any = None  # online evaluation: each run's `Learner` as the run ended
 
 
 def jitter(layout: Layout, key) -> Layout:
@@ -101,6 +104,99 @@ def start(env: Tabletop, layouts: Layout, keys):
 
 
 @struct.dataclass
+class Learner:
+  """Online evaluation's learning, per run (B, ...): the run's own parameters and optimiser
+  state, and its last transition, which waits for the acting forward of its next state to value
+  it (as `train.target='acting'` does in training)."""
+  params: Any
+  opt_state: Any
+  pending: replay_lib.Transition
+  pending_valid: jnp.ndarray  # (B,) bool
+
+
+class OnlinePolicy:
+  """A trained network that goes on learning in every run, the test protocol of VPG and the
+  MV-COBA authors: each run starts from the trained parameters and, after each action, takes one
+  SGD step on its previous transition with the loss, targets and optimiser of `config.train`.
+  Every run holds its own copy (stacked along the run axis), so a run learns from its own
+  transitions only; a finished run learns no more."""
+
+  def __init__(self, model: networks.QNetwork, config: Config):
+    self.graphdef, self.params = nnx.split(model)
+    self.config = config
+    self.method = config.network.method
+    self.views = networks.views_used(self.method)
+    self.optimizer = agent.optimizer(config.train)
+
+  def q_maps(self, params, obs: perception.Observation, rotations=None):
+    return nnx.merge(self.graphdef, params)(obs.color, obs.depth, rotations)
+
+  def _per_run(self, fn, params, obs, *args):
+    """`fn(params, obs, *args)` of each run with its own parameters (a batch of one each)."""
+    one = lambda p, o, *a: jax.tree.map(lambda x: x[0], fn(p, jax.tree.map(
+        lambda x: x[None], o), *(jax.tree.map(lambda x: x[None], v) for v in a)))
+    return jax.vmap(one)(params, obs, *args)
+
+  def init(self, obs: perception.Observation) -> Learner:
+    """Every run of the batch (B,) with the trained parameters and nothing to learn yet."""
+    n = obs.depth.shape[0]
+    params = jax.tree.map(lambda x: jnp.broadcast_to(x, (n,) + x.shape), self.params)
+    zeros = lambda dtype: jnp.zeros(n, dtype)
+    pending = replay_lib.Transition(
+        obs=obs, next_obs=obs, primitive=zeros(jnp.int32), rotation=zeros(jnp.int32),
+        row=zeros(jnp.int32), col=zeros(jnp.int32), reward=zeros(jnp.float32),
+        done=zeros(jnp.bool_), changed=zeros(jnp.bool_), next_value=zeros(jnp.float32))
+    return Learner(params=params, opt_state=jax.vmap(self.optimizer.init)(params),
+                   pending=pending, pending_valid=zeros(jnp.bool_))
+
+  def act(self, learner: Learner, obs, changed):
+    """Each run's greedy action on its own Q maps, and the maps."""
+    q = self._per_run(self.q_maps, learner.params, obs)
+    maps = agent.rule_maps(q, obs.depth, self.views, self.method, self.config)
+    return agent.greedy_actions(maps, changed, self.method), q
+
+  def learn(self, learner: Learner, q, changed, active) -> Learner:
+    """One SGD step per run on its waiting transition, valued by `q` of the state it led to;
+    runs not `active`, with nothing waiting or with a non-finite step keep their parameters."""
+    t = self.config.train
+    pending = learner.pending
+    y = agent.bootstrap(agent.future_value(q, changed, self.method, t), pending.done,
+                        pending.reward, t)
+
+    def step(params, opt_state, transition, y):
+      one = jax.tree.map(lambda x: x[None], transition)
+      (loss, _), grads = jax.value_and_grad(agent.executed_loss, argnums=1, has_aux=True)(
+          self.q_maps, params, one, y[None], jnp.ones(1, bool), self.config)
+      updates, opt_state = self.optimizer.update(grads, opt_state, params)
+      params = optax.apply_updates(params, updates)
+      sound = jnp.isfinite(loss) & jnp.all(jnp.stack(
+          [jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves(params)]))
+      return params, opt_state, sound
+
+    params, opt_state, sound = jax.vmap(step)(learner.params, learner.opt_state, pending, y)
+    ok = learner.pending_valid & active & sound
+    keep = lambda new, old: jax.tree.map(
+        lambda a, b: jnp.where(ok.reshape(ok.shape + (1,) * (a.ndim - 1)), a, b), new, old)
+    return learner.replace(params=keep(params, learner.params),
+                           opt_state=keep(opt_state, learner.opt_state))
+
+  def remember(self, learner: Learner, obs, action: agent.PixelAction, out: task.Outcome,
+               active) -> Learner:
+    """The transition each active run just made, to learn from once its next state is valued; a
+    run that this action finished has no next state to value, and learns no more."""
+    t = self.config.train
+    no_future = ~out.info.healthy | (~out.changed if not t.bootstrap_no_change else False)
+    zeros = jnp.zeros_like(out.reward)
+    made = replay_lib.Transition(
+        obs=obs, next_obs=obs, primitive=action.primitive, rotation=action.rotation,
+        row=action.row, col=action.col, reward=out.reward, done=no_future,
+        changed=out.changed, next_value=zeros)
+    waits = active & ~out.done
+    return learner.replace(pending=where_envs(waits, made, learner.pending),
+                           pending_valid=waits)
+
+
+@struct.dataclass
 class Batch:
   """The evaluation loop's carry: the runs in the batch (B,) and the lockstep action count."""
   states: EnvState
@@ -109,6 +205,7 @@ class Batch:
   runs: Runs
   keys: jnp.ndarray  # (B, 2)
   t: jnp.ndarray  # int32: lockstep actions taken
+  learner: Learner | None = None  # online evaluation's learning (`OnlinePolicy`)
 
 
 @functools.partial(jax.jit, static_argnames=('env', 'views', 'max_actions', 'record'))
@@ -153,14 +250,23 @@ def advance(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch,
             record: bool, progress, until, retired) -> Batch:
   """Lockstep actions until every run of the batch has finished, the action cap, or no more than
   `until` runs still going; `retired`: the finished runs outside this batch (for `progress`)."""
+  online = isinstance(policy, OnlinePolicy)
+
   def body(batch: Batch) -> Batch:
     states, obs, runs = batch.states, batch.obs, batch.runs
     keys, k_act = jax.vmap(jax.random.split, out_axes=1)(batch.keys)
-    action = policy(obs, batch.changed, k_act)
+    active = ~runs.finished
+    learner = batch.learner
+    if online:
+      action, q = policy.act(learner, obs, batch.changed)
+      learner = policy.learn(learner, q, batch.changed, active)
+    else:
+      action = policy(obs, batch.changed, k_act)
     next_states, next_obs, out = task.step(env, views, states, obs, runs.failures, action,
                                             env.config.train)
+    if online:
+      learner = policy.remember(learner, obs, action, out, active)
     info = out.info
-    active = ~runs.finished
     count = lambda total, x: total + jnp.where(active, x, 0).astype(jnp.int32)
     is_grasp = action.primitive == agent.GRASP
     picked = count(runs.picked, info.picked)
@@ -183,7 +289,7 @@ def advance(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch,
     next_states = where_envs(runs.finished, jax.vmap(env.emptied)(next_states), next_states)
     return Batch(states=next_states, obs=where_envs(active, next_obs, obs),
                  changed=jnp.where(active, out.changed, batch.changed), runs=runs, keys=keys,
-                 t=batch.t + 1)
+                 t=batch.t + 1, learner=learner)
 
   def going(batch: Batch):
     still = jnp.sum(~batch.runs.finished)
@@ -215,6 +321,7 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
              progress: Callable[[jnp.ndarray, jnp.ndarray], None] | None = None,
              smallest: int = 8) -> Runs:
   """Runs the greedy `policy` from each layout (N,) with its key (N,); returns the counters.
+  An `OnlinePolicy` goes on learning in every run, each from its own transitions.
 
   The runs step in lockstep in one compiled loop. Once no more than half of the batch is still
   going, those runs go on in a batch half the size (padded with finished runs), down to
@@ -226,12 +333,15 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
   called on the host after every lockstep action: a large suite can take an hour on a CPU.
   """
   batch = begin(env, views, layouts, keys, max_actions, record)
+  if isinstance(policy, OnlinePolicy):
+    batch = batch.replace(learner=jax.jit(policy.init)(batch.obs))
   n = layouts.in_play.shape[0]
-  size, members, runs = n, jnp.arange(n), batch.runs
+  size, members, runs = n, jnp.arange(n), batch.runs.replace(learner=batch.learner)
   while True:
     until = size // 2 if size // 2 >= smallest else -1
     batch = advance(env, policy, views, batch, max_actions, record, progress, until, n - size)
-    runs = jax.tree.map(lambda whole, part: whole.at[members].set(part), runs, batch.runs)
+    runs = jax.tree.map(lambda whole, part: whole.at[members].set(part), runs,
+                        batch.runs.replace(learner=batch.learner))
     going = int(jnp.sum(~batch.runs.finished))
     if not going or int(batch.t) >= max_actions:
       return runs
@@ -374,11 +484,14 @@ def source_name(method_source) -> str:
   return method_source[0].network.method
 
 
-def make_policy(method_source, config):
-  """(policy factory for an env, views) of a checkpoint or a baseline."""
+def make_policy(method_source, config, online: bool = False):
+  """(policy, views) of a checkpoint or a baseline; with `online`, a checkpoint's
+  `OnlinePolicy`."""
   if isinstance(method_source, str):  # a baseline
     return heuristic_policy(config.env.num_rotations), (0, 1)
   config, model, _ = method_source
+  if online:
+    return OnlinePolicy(model, config), networks.views_used(config.network.method)
   graphdef, params = nnx.split(model)
   method = config.network.method
   q_maps = lambda obs: nnx.merge(graphdef, params)(obs.color, obs.depth)

@@ -101,19 +101,21 @@ def _flat(tree, prefix=''):
 def training_groups(rows: dict[str, dict]) -> dict[str, list[str]]:
   """Rows that are one method trained with one config except its seed, named: the method, or
   when it was trained in several configs, the method and the fields where its config differs
-  from the value most of them hold (`mvcoba {train.gamma=0.2}`). A training seed met again in a config (one policy evaluated from
-  two folders) goes to a group of its own, so an interval never counts a seed twice. Rows read
-  from results written before evaluation recorded the training config (`settings.training`) form
-  a group of their own per method."""
+  from the value most of them hold (`mvcoba {train.gamma=0.2}`); rows evaluated online
+  (`--online`) group apart (`mvcoba [online]`). A training seed met again in a config (one
+  policy evaluated from two folders) goes to a group of its own, so an interval never counts a
+  seed twice. Rows read from results written before evaluation recorded the training config
+  (`settings.training`) form a group of their own per method."""
   found, seeds = {}, {}
   for label, result in rows.items():
     settings = result.get('settings') or {}
     training = settings.get('training')
     key = json.dumps(training, sort_keys=True) if isinstance(training, dict) else None
-    seen = seeds.setdefault((method_of(label), key), [])
+    method = method_of(label) + (' [online]' if settings.get('protocol') == 'online' else '')
+    seen = seeds.setdefault((method, key), [])
     again = seen.count(settings.get('training_seed')) if key is not None else 0
     seen.append(settings.get('training_seed'))
-    found.setdefault(method_of(label), {}).setdefault((key, again), []).append(label)
+    found.setdefault(method, {}).setdefault((key, again), []).append(label)
   groups = {}
   for method, by_config in found.items():
     if len(by_config) == 1:

@@ -79,9 +79,7 @@ class Trainer:
     self.views = networks.views_used(self.method)
     model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
     self.graphdef, _ = nnx.split(model)
-    t = config.train
-    self.optimizer = optax.chain(optax.add_decayed_weights(t.weight_decay),
-                                 optax.sgd(t.learning_rate, momentum=t.momentum))
+    self.optimizer = agent.optimizer(config.train)
 
   # ---------------------------------------------------------------- network
   def q_maps(self, params, obs: perception.Observation, rotations=None):
@@ -133,35 +131,15 @@ class Trainer:
 
   # ---------------------------------------------------------------- learning
   def loss(self, params, target_params, batch, valid):
-    """Huber loss on the executed pixel, summed over the sampled transitions; also TD errors.
-
-    Summed, not averaged: each transition then moves the parameters as much as one of VPG's
-    single-transition steps at the paper's learning rate. The mean made a batch of B worth one
-    such step: learning per action was 16 times slower than VPG's (issue #4, first default run).
-    With `train.grasp_symmetry` a grasp's target also labels its rotation turned half way, in
-    the same forward (two rotations per transition).
-    """
+    """`agent.executed_loss` of the sampled transitions against their bootstrap targets: the
+    stored next-state value (`train.target='acting'`) or the target network's."""
     t = self.config.train
     if t.target == 'acting':
       y = agent.bootstrap(batch.next_value, batch.done, batch.reward, t)
     else:
       q_next = self.q_maps(target_params, batch.next_obs)
       y = agent.target_value(q_next, batch.changed, batch.done, batch.reward, self.method, t)
-    y = jax.lax.stop_gradient(y)
-    weight = valid.astype(jnp.float32)
-    if not t.grasp_symmetry:
-      q = self.q_maps(params, batch.obs, batch.rotation[:, None])
-      pred = networks.executed_q(q, batch.primitive, batch.row, batch.col)
-      return jnp.sum(networks.huber_loss(pred, y, t.huber_delta) * weight), pred - y
-    k = self.config.env.num_rotations
-    turned = (batch.rotation + k // 2) % k
-    q = self.q_maps(params, batch.obs, jnp.stack([batch.rotation, turned], axis=1))
-    pred, pred_turned = (networks.executed_q(q[:, :, i:i + 1], batch.primitive, batch.row,
-                                             batch.col) for i in (0, 1))
-    is_grasp = (batch.primitive == agent.GRASP).astype(jnp.float32)
-    per = (networks.huber_loss(pred, y, t.huber_delta)
-           + is_grasp * networks.huber_loss(pred_turned, y, t.huber_delta))
-    return jnp.sum(per * weight), pred - y
+    return agent.executed_loss(self.q_maps, params, batch, y, valid, self.config)
 
   def update(self, state: TrainState, key, enabled=True,
              fresh: tuple[replay_lib.Transition, jnp.ndarray] | None = None

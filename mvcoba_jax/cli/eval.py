@@ -1,7 +1,8 @@
 """Evaluates trained policies (or a baseline) on test suites and prints the paper's tables.
 
   mvcoba-eval --checkpoint runs/train [runs/vpg ...] [--suite random|ordered|occluded|isolated|vpg|all|PATH ...]
-              [--runs 5] [--max-actions 60] [--out eval_out] [--resume] [--save-visuals] [--video]
+              [--runs 5] [--max-actions 60] [--out eval_out] [--resume] [--online]
+              [--save-visuals] [--video]
   mvcoba-eval --baseline heuristic --suite ordered        # no checkpoint needed
   mvcoba-eval --compare runs/mvcoba runs/vpg ...          # same as several --checkpoint
   mvcoba-eval --tables runs/eval-a runs/eval-b --out X    # one table from earlier --out folders
@@ -74,6 +75,11 @@ def main(argv=None) -> int:
                       help="keep the rows of --out's results.json evaluated with the same "
                            'checkpoint, cases and settings; evaluate the rest (videos and '
                            'strips are written for those only)')
+  parser.add_argument('--online', action='store_true',
+                      help='the test protocol of VPG and the MV-COBA authors: every run starts '
+                           'from the trained weights and takes one SGD step after each of its '
+                           'actions (rows labelled [online]); default: the trained network, '
+                           'frozen')
   parser.add_argument('--save-visuals', action='store_true',
                       help='write a PNG strip of heightmaps and actions per run')
   parser.add_argument('--video', action='store_true',
@@ -108,6 +114,8 @@ def main(argv=None) -> int:
     return 0
   if not args.checkpoint and not args.baseline:
     parser.error('give --checkpoint DIR ..., --baseline heuristic or --tables EVAL_DIR ...')
+  if args.online and args.baseline:
+    parser.error('--online needs a trained network to go on learning; --baseline has none')
   try:  # everything that can be wrong with the input fails here, before any compile
     base = config_lib.from_arguments(args)
     bounds = base.scene.workspace_half, base.scene.workspace_top
@@ -123,12 +131,14 @@ def main(argv=None) -> int:
     source_names = [evaluation.source_name(s) for s in sources]
     labels = (report_lib.row_labels(args.checkpoint, source_names[:len(args.checkpoint)])
               + source_names[len(args.checkpoint):])
+    if args.online:
+      labels = [f'{label} [online]' for label in labels]
     settings = {(suite, label): {
         'checkpoint': path, 'step': None if isinstance(source, str) else source[2],
         'params': None if isinstance(source, str) else fingerprint(source[1]),
         'cases': [c.name for c in cases], 'runs': args.runs, 'max_actions': args.max_actions,
         'seed': args.seed, 'set': args.overrides, 'training': training[0],
-        'training_seed': training[1]}
+        'training_seed': training[1], 'protocol': 'online' if args.online else 'frozen'}
         for suite, cases in suites.items()
         for label, source, path, training in zip(labels, sources, args.checkpoint + [None],
                                                  trained)}
@@ -159,7 +169,7 @@ def main(argv=None) -> int:
       config = base if isinstance(source, str) else source[0]
       env = Tabletop(evaluation.suite_config(config, evaluation.pool_for(cases)),
                      frames=video.FRAMES_PER_PRIMITIVE if args.video else 0)
-      policy, views = evaluation.make_policy(source, env.config)
+      policy, views = evaluation.make_policy(source, env.config, args.online)
       layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(args.runs)])
       keys = jax.random.split(jax.random.PRNGKey(args.seed), len(cases) * args.runs)
       print(f'{suite}: {label}, {len(cases)} cases x {args.runs} runs, up to '

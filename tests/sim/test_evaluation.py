@@ -333,3 +333,48 @@ def test_repeated_failed_actions_are_counted_per_run(setup):
   assert [r.repeated_failures for r in logs] == [attempts - 1] * 2
   assert metrics.case_metrics(logs)['repeated_failures'] == attempts - 1
   assert all(r.repeated_failures == 0 for r in evaluation.run_logs(heuristic))
+
+
+@pytest.fixture(scope='module')
+def online(setup):
+  """An untrained network's online policy on the setup's cases."""
+  from flax import nnx
+
+  from mvcoba_jax import networks
+  _, env, _, layouts, keys, _ = setup
+  model = networks.build_network(env.config.network, env.config.env.num_rotations, nnx.Rngs(0))
+  policy, views = evaluation.make_policy((env.config, model, 0), env.config, online=True)
+  run = lambda l, k, cap: evaluation.evaluate(env, policy, views, l, k, cap)
+  return policy, run, layouts, keys
+
+
+def test_online_runs_learn_each_from_its_own_transitions(online):
+  """Each run starts from the trained parameters and ends with its own: two cases end apart;
+  a case alone (its batch filled with copies of itself) ends with what it ended with beside the
+  other, weights and counters alike."""
+  policy, run, layouts, keys = online
+  together = run(layouts, keys, 4)
+  leaves = [np.asarray(x) for x in jax.tree.leaves(together.learner.params)]
+  start = [np.asarray(x) for x in jax.tree.leaves(policy.params)]
+  for i in range(2):
+    assert any(not np.array_equal(x[i], s) for x, s in zip(leaves, start))
+  assert any(not np.array_equal(x[0], x[1]) for x in leaves)
+  for i in range(2):
+    alone = run(jax.tree.map(lambda x: jnp.stack([x[i]] * 2), layouts), jnp.stack([keys[i]] * 2), 4)
+    for a, b in zip(jax.tree.leaves(alone), jax.tree.leaves(together)):
+      np.testing.assert_array_equal(np.asarray(a)[0], np.asarray(b)[i])
+
+
+def test_a_finished_run_learns_no_more(online):
+  """A run on an empty table finishes with its first action, which has no next state to learn
+  from: it ends with the trained weights, whether the batch stops at 3 actions or 6; the other
+  run, still going at 3, learned more by 6."""
+  policy, run, layouts, keys = online
+  empty = layouts.replace(in_play=layouts.in_play.at[0].set(False))
+  short, long = run(empty, keys, 3), run(empty, keys, 6)
+  assert [r.actions for r in evaluation.run_logs(short)] == [1, 3]
+  params = lambda runs, i: [np.asarray(x)[i] for x in jax.tree.leaves(runs.learner.params)]
+  start = [np.asarray(x) for x in jax.tree.leaves(policy.params)]
+  for runs in (short, long):
+    assert all(np.array_equal(a, b) for a, b in zip(params(runs, 0), start))
+  assert any(not np.array_equal(a, b) for a, b in zip(params(short, 1), params(long, 1)))

@@ -236,12 +236,23 @@ def test_sweep_of_methods_and_seeds_trains_evaluates_and_aggregates(tmp_path, ca
   assert eval_cli.main(['--checkpoint', *(str(sweep / r) for r in runs),
                         str(tmp_path / 'copy' / 'mvcoba-s1'), '--suite', str(case),
                         '--runs', '2', '--max-actions', '2', '--out', str(out)]) == 0
-  rows = json.loads((out / 'results.json').read_text())['case']
+  rows, = json.loads((out / 'results.json').read_text()).values()
   assert 'mvcoba (sweep/mvcoba-s1)' in rows and 'mvcoba (copy/mvcoba-s1)' in rows
   assert rows['mvcoba (copy/mvcoba-s1)']['settings']['training_seed'] == 1
   text = (out / 'results.md').read_text()
   assert 'over training seeds, mean [95% CI]' in text
   assert '| mvcoba | 2 |' in text and '| grasp_only | 2 |' in text
+  # The same policies under the online protocol: rows and intervals of their own, also when
+  # joined with the frozen ones.
+  online = tmp_path / 'online'
+  assert eval_cli.main(['--checkpoint', *(str(sweep / r) for r in runs[2:]), '--suite', str(case),
+                        '--runs', '1', '--max-actions', '2', '--online', '--out', str(online)]) == 0
+  rows, = json.loads((online / 'results.json').read_text()).values()
+  assert list(rows) == ['mvcoba (mvcoba-s0) [online]', 'mvcoba (mvcoba-s1) [online]']
+  assert {r['settings']['protocol'] for r in rows.values()} == {'online'}
+  assert eval_cli.main(['--tables', str(out), str(online), '--out', str(tmp_path / 'j')]) == 0
+  joined = (tmp_path / 'j' / 'results.md').read_text()
+  assert '| mvcoba | 2 |' in joined and '| mvcoba [online] | 2 |' in joined
   with pytest.raises(SystemExit):  # a sweep and a single run at once
     train_cli.main(['--config', TINY, '--workdir', str(sweep), '--methods', 'mvcoba',
                     '--method', 'vpg'])
