@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import importlib.util
+import json
 import math
 import pathlib
 import re
@@ -391,7 +392,7 @@ def trained_as(config: Config) -> dict:
   for name in RUNTIME_FIELDS:
     section, field = name.split('.')
     del data[section][field]
-  return data
+  return json.loads(json.dumps(data))  # as results.json holds it: lists for tuples
 
 
 def _value(value, tp, where: str):

@@ -5,11 +5,13 @@ seeds beside the paper's figures.
   mvcoba-reproduce [--methods mvcoba mvcoba_2fcn vpg grasp_only mvp cpg] [--seeds 0 1 2]
                    [--actions 3000] [--runs 5] [--suites random ordered occluded]
                    [--workdir runs/reproduction] [--out docs/results/reproduction]
+                   [--protocols frozen online]
                    [--config default] [--set KEY=VALUE ...]
 
 A killed reproduction resumes where it stopped: training from each run's latest checkpoint,
-evaluation keeping every (suite, policy) row it finished. Writes the evaluation's results.json and
-results.md and comparison.md (ours beside the paper's, per suite) and the sweep's training
+evaluation keeping every (suite, policy) row it finished. Each test protocol (--protocols: frozen
+in --out, online in --out/online) gets the evaluation's results.json and results.md and
+comparison.md (ours beside the paper's, per suite); --out also gets the sweep's training
 curves (mean over seeds with a band, one PNG per metric) to --out, and prints the
 expected and the actual time (summed over invocations from the runs' logs).
 """
@@ -32,7 +34,14 @@ from mvcoba_jax.suites import SUITES, suite_files
 # Rough speeds on a 2-core CPU, native backend, default preset (docs/results/reproduction.md:
 # 54144 actions in 88 min, 1350 case runs in 55 min): what the expected wall time is computed from.
 TRAIN_ACTIONS_PER_S = 10.0
-EVAL_S_PER_CASE_RUN = 2.5
+ONLINE_COST = 1.5  # online over frozen evaluation time (benchmarks/online_eval.py)
+EVAL_S_PER_CASE_RUN = {'frozen': 2.5, 'online': 2.5 * ONLINE_COST}
+
+PROTOCOLS = {
+    'frozen': 'the trained network, frozen, acts greedily in every run',
+    'online': 'every run starts from the trained network and takes one SGD step after each of '
+              'its actions (VPG\'s and the MV-COBA authors\' test protocol)',
+}
 
 
 def training_seconds(workdirs) -> float:
@@ -59,14 +68,20 @@ def main(argv=None) -> int:
   parser.add_argument('--suites', nargs='+', default=['random', 'ordered', 'occluded'],
                       choices=SUITES)
   parser.add_argument('--workdir', default='runs/reproduction', help='the training sweep')
-  parser.add_argument('--out', default='docs/results/reproduction', help='tables')
+  parser.add_argument('--out', default='docs/results/reproduction',
+                      help='tables (the online protocol\'s in OUT/online)')
+  parser.add_argument('--protocols', nargs='+', choices=PROTOCOLS, default=list(PROTOCOLS),
+                      help='frozen: the trained network as it is; online: every run goes on '
+                           'learning from its own actions (mvcoba-eval --online), as the paper '
+                           'tested')
   args = parser.parse_args(argv)
   if args.actions < 1 or args.runs < 1:
     parser.error('--actions and --runs must be at least 1')
   trainings = len(args.methods) * len(args.seeds)
   cases = sum(len(files) for files in suite_files(args.suites).values())
   expected = (trainings * args.actions / TRAIN_ACTIONS_PER_S
-              + trainings * cases * args.runs * EVAL_S_PER_CASE_RUN)
+              + sum(EVAL_S_PER_CASE_RUN[p] for p in args.protocols)
+              * trainings * cases * args.runs)
   print(f'{trainings} trainings of {args.actions} actions, then {trainings} policies x {cases} '
         f'cases x {args.runs} runs: expected about {expected / 60:.0f} min on a 2-core CPU',
         flush=True)
@@ -81,24 +96,38 @@ def main(argv=None) -> int:
   if code:
     return code
   dirs = [workdir / f'{m}-s{s}' for m in args.methods for s in args.seeds]
-  out = pathlib.Path(args.out)
-  code = eval_cli.main(['--checkpoint', *map(str, dirs), '--suite', *args.suites,
-                        '--runs', str(args.runs), '--max-actions', str(args.max_actions),
-                        '--out', str(out), '--resume'])
-  if code:
-    return code
-  report = json.loads((out / 'results.json').read_text())
-  text = paper.comparisons(report)
-  train_s, eval_s = training_seconds(dirs), evaluation_seconds(report)
+  texts, eval_s = {}, 0.0
+  for protocol in args.protocols:
+    out = protocol_folder(pathlib.Path(args.out), protocol)
+    code = eval_cli.main(['--checkpoint', *map(str, dirs), '--suite', *args.suites,
+                          '--runs', str(args.runs), '--max-actions', str(args.max_actions),
+                          '--out', str(out), '--resume']
+                         + (['--online'] if protocol == 'online' else []))
+    if code:
+      return code
+    report = json.loads((out / 'results.json').read_text())
+    texts[protocol] = (f'Test protocol: {PROTOCOLS[protocol]}.\n\n'
+                       + paper.comparisons(report))
+    eval_s += evaluation_seconds(report)
+  train_s = training_seconds(dirs)
   wall = time.perf_counter() - start
   timing = (f'Expected wall time {expected / 60:.0f} min; spent {(train_s + eval_s) / 60:.0f} min '
             f'({train_s / 60:.0f} training, {eval_s / 60:.0f} evaluating: the sums of the '
             f'runs\' logged times, over every invocation); this invocation {wall / 60:.0f} min.')
-  (out / 'comparison.md').write_text(f'{text}\n\n{timing}\n')
+  for protocol, text in texts.items():
+    (protocol_folder(pathlib.Path(args.out), protocol) / 'comparison.md').write_text(
+        f'{text}\n\n{timing}\n')
+  out = pathlib.Path(args.out)
   curves = [shutil.copy(path, out) for path in sorted(workdir.glob('curves-*.png'))]
-  print(f'\n{text}\n\n{timing}\nwrote {out / "comparison.md"} and the sweep\'s training curves '
+  print('\n' + '\n\n'.join(texts.values()) + f'\n\n{timing}\nwrote comparison.md of each '
+        f'protocol under {out} and the sweep\'s training curves '
         f'({", ".join(pathlib.Path(c).name for c in curves)})')
   return 0
+
+
+def protocol_folder(out: pathlib.Path, protocol: str) -> pathlib.Path:
+  """Where a protocol's tables go: --out itself for the frozen one, --out/online for online."""
+  return out if protocol == 'frozen' else out / protocol
 
 
 if __name__ == '__main__':

@@ -265,20 +265,25 @@ def test_reproduction_trains_evaluates_and_sets_ours_beside_the_paper(tmp_path, 
                              '--suites', 'occluded', '--workdir', str(tmp_path / 'sweep'),
                              '--out', str(out)]) == 0
   text = (out / 'comparison.md').read_text()
+  assert text.startswith('Test protocol: the trained network, frozen')
   assert '### occluded: mean [95% CI over 2 seeds] and the paper' in text
   assert '| DRGP (grasp_only) | 2 |' in text and '| MV-COBA (not run) | - |' in text and '97.8' in text
   assert 'Expected wall time' in text and 'expected about' in capsys.readouterr().out
   assert (out / 'curves-grasp_success.png').is_file()
+  online = (out / 'online' / 'comparison.md').read_text()  # the paper's test protocol
+  assert online.startswith('Test protocol: every run starts from the trained network')
+  assert '| DRGP (grasp_only [online]) | 2 |' in online
   # Started again it trains and evaluates nothing anew: every run is finished and every row of
   # the evaluation is kept.
-  results = json.loads((out / 'results.json').read_text())
+  results = [json.loads((folder / 'results.json').read_text()) for folder in (out, out / 'online')]
   assert reproduce_cli.main(['--config', TINY, '--methods', 'grasp_only', '--seeds', '0', '1',
                              '--actions', '4', '--runs', '1', '--max-actions', '2',
                              '--suites', 'occluded', '--workdir', str(tmp_path / 'sweep'),
                              '--out', str(out)]) == 0
   printed = capsys.readouterr().out
-  assert printed.count('finished already') == 2 and printed.count('kept from') == 2
-  assert json.loads((out / 'results.json').read_text()) == results
+  assert printed.count('finished already') == 2 and printed.count('kept from') == 4
+  assert [json.loads((folder / 'results.json').read_text())
+          for folder in (out, out / 'online')] == results
 
 
 AUTHORS_RECIPE = ['train.failed_grasp_reward=0', 'train.no_change_push_reward=-1',
