@@ -79,7 +79,7 @@ def main(argv=None) -> int:
       if not (train_dir / 'eval_summary.json').is_file():
         if not run(['mvcoba-train', *VARIANTS[variant], '--seed', str(seed), '--workdir',
                     str(train_dir), '--eval-actions', '1']
-                   + (['--resume'] if (train_dir / 'checkpoints').is_dir() else []),
+                   + (['--resume'] if (train_dir / 'checkpoints').is_dir() else ['--overwrite']),
                    log, f'train-{name}'):
           continue
       if not (eval_dir / 'results.json').is_file() or not (eval_dir / 'done').is_file():

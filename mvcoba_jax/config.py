@@ -138,6 +138,7 @@ class Config:
 REPLAY_LIMIT_BYTES = 16 * 2 ** 30  # a replay above this is refused: no CPU here holds it twice
 ACTIVATION_LIMIT_BYTES = 32 * 2 ** 30  # rough size of one acting forward's feature maps
 DENSENET_GROWTH = 32  # channels each DenseNet layer adds: GroupNorm's groups must divide it
+PHASE_LIMIT_S = 30.0  # simulated seconds of one primitive phase or a reset's settling
 
 
 def validate(config: Config) -> Config:
@@ -164,6 +165,18 @@ def validate(config: Config) -> Config:
     raise ConfigError(f'train.epsilon_end={train.epsilon_end!r} must not exceed '
                       f'train.epsilon_start={train.epsilon_start!r}')
   widths = (DENSENET_GROWTH,) if net.trunk == 'densenet121' else net.features
+  if train.batch_size > train.replay_capacity:
+    raise ConfigError(f'train.batch_size={train.batch_size} exceeds train.replay_capacity='
+                      f'{train.replay_capacity}: a batch would draw the same transitions again')
+  phases = {'env.approach_height / env.descend_speed': env.approach_height / env.descend_speed,
+            'env.lift_height / env.lift_speed': env.lift_height / env.lift_speed,
+            'env.push_length / env.push_speed': env.push_length / env.push_speed,
+            'env.close_time': env.close_time, 'env.hold_time': env.hold_time,
+            'env.settle_steps x scene.timestep': env.settle_steps * scene.timestep}
+  for name, seconds in phases.items():
+    if seconds > PHASE_LIMIT_S:
+      raise ConfigError(f'{name} = {seconds:.3g} s of simulated motion; at most '
+                        f'{PHASE_LIMIT_S:g} s per phase of a primitive or a reset')
   if train.grasp_symmetry and env.num_rotations % 2:
     raise ConfigError(f'train.grasp_symmetry needs an even env.num_rotations (the grasp turned '
                       f'half way); it is {env.num_rotations}')
@@ -213,6 +226,9 @@ def load_preset(preset: str | pathlib.Path) -> Config:
     path = pathlib.Path(preset)
     if not path.is_file():
       raise ConfigError(f'config preset {path}: neither a file nor one of {", ".join(PRESETS)}')
+    if path.suffix != '.py':
+      raise ConfigError(f'config preset {path}: a preset file is Python (.py) that defines '
+                        'get_config()')
     spec = importlib.util.spec_from_file_location(f'mvcoba_preset_{path.stem}', path)
     module = importlib.util.module_from_spec(spec)
     try:
@@ -221,7 +237,13 @@ def load_preset(preset: str | pathlib.Path) -> Config:
       raise ConfigError(f'config preset {path}: {type(e).__name__}: {e}') from None
   if not hasattr(module, 'get_config'):
     raise ConfigError(f'config preset {preset} defines no get_config()')
-  config = module.get_config()
+  try:
+    config = module.get_config()
+  except ConfigError:
+    raise
+  except Exception as e:  # a user's Python: any error is theirs to see, named
+    raise ConfigError(f'config preset {preset}: get_config() raised {type(e).__name__}: '
+                      f'{str(e)[:200]}') from None
   if not isinstance(config, Config):
     raise ConfigError(f'config preset {preset}: get_config() returned {type(config).__name__}, '
                       'not a mvcoba_jax.config.Config')

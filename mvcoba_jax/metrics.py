@@ -25,6 +25,35 @@ class RunLog:
   repeated_failures: int | None = None
 
 
+def run_log(data, where: str) -> RunLog:
+  """A RunLog from its JSON object, checked: counts are non-negative integers that fit each
+  other (successes <= attempts <= actions, picked + lost <= objects); ValueError names the
+  field otherwise."""
+  if not isinstance(data, dict):
+    raise ValueError(f'{where}: a run log is an object of counts, got {str(data)[:40]!r}')
+  fields = {f.name for f in dataclasses.fields(RunLog)}
+  unknown = sorted(set(data) - fields)
+  if unknown:
+    raise ValueError(f'{where}: unknown fields {", ".join(unknown)[:80]}')
+  for name in fields:
+    value = data.get(name)
+    if name == 'repeated_failures' and value is None:
+      continue
+    if name == 'completed':
+      if not isinstance(value, bool):
+        raise ValueError(f'{where}.completed: expected true or false, got {str(value)[:40]!r}')
+    elif isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2 ** 31:
+      raise ValueError(f'{where}.{name}: expected a count, got {str(value)[:40]!r}')
+  log = RunLog(**data)
+  if not log.grasp_successes <= log.grasp_attempts <= log.actions:
+    raise ValueError(f'{where}: grasp_successes {log.grasp_successes} <= grasp_attempts '
+                     f'{log.grasp_attempts} <= actions {log.actions} does not hold')
+  if log.picked + log.lost > log.objects or log.completed and log.picked != log.objects:
+    raise ValueError(f'{where}: picked {log.picked} and lost {log.lost} do not fit objects '
+                     f'{log.objects} (completed: {log.completed})')
+  return log
+
+
 def case_metrics(runs: list[RunLog]) -> dict:
   """Metrics of the runs of one case.
 

@@ -67,7 +67,7 @@ def load(workdir) -> tuple[Config, networks.QNetwork, int]:
     raise PolicyError(f'no checkpoints in {workdir / "checkpoints"}')
   try:
     config = _config(json.loads(config_path.read_text()), config_path)
-  except (ValueError, TypeError) as e:  # bad JSON or values that do not fit the fields
+  except (ValueError, TypeError, RecursionError) as e:  # bad JSON or values that misfit fields
     raise PolicyError(f'{config_path}: {e}') from None
   checkpoints = Checkpoints(workdir)
   step = checkpoints.latest()
@@ -131,9 +131,11 @@ def load_exported(folder) -> tuple[Config, networks.QNetwork, int]:
     if described.get('format') != FORMAT:
       raise ValueError(f'format {described.get("format")!r}, expected {FORMAT!r}')
     config = _config(described['config'], model_path)
-    step = int(described['source']['checkpoint_step'])
+    step = described['source']['checkpoint_step']
+    if isinstance(step, bool) or not isinstance(step, int) or step < 0:
+      raise ValueError(f'source.checkpoint_step {str(step)[:40]!r} is not a step count')
     model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
-  except (OSError, ValueError, TypeError, KeyError, AttributeError) as e:
+  except (OSError, ValueError, TypeError, KeyError, AttributeError, RecursionError) as e:
     raise PolicyError(f'{model_path}: not an export of mvcoba_jax ({type(e).__name__}: {e})'
                       ) from None
   want = {n: (a.shape, a.dtype) for n, a in flat_params(model).items()}

@@ -205,8 +205,9 @@ def kept_rows(out: pathlib.Path, settings: dict[tuple[str, str], dict]) -> dict:
     return {}
   try:
     data = json.loads(path.read_text())
-  except (OSError, json.JSONDecodeError) as e:
-    raise ResultsError(f'{path}: cannot read evaluation results to resume ({e})') from None
+  except (OSError, ValueError, RecursionError) as e:
+    raise ResultsError(f'{path}: cannot read evaluation results to resume '
+                       f'({type(e).__name__}: {str(e)[:120]})') from None
   report = {}
   for (suite, label), wanted in settings.items():
     rows = data.get(suite) if isinstance(data, dict) else None
@@ -236,8 +237,9 @@ def joined_report(folders: list[str]) -> dict:
     path = pathlib.Path(folder) / 'results.json'
     try:
       data = json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError) as e:
-      raise ResultsError(f'{path}: cannot read evaluation results ({e})') from None
+    except (OSError, ValueError, RecursionError) as e:
+      raise ResultsError(f'{path}: cannot read evaluation results '
+                         f'({type(e).__name__}: {str(e)[:120]})') from None
     if not isinstance(data, dict) or not all(isinstance(rows, dict) for rows in data.values()):
       raise ResultsError(f'{path}: not the results of mvcoba-eval (suite -> method -> results)')
     for suite, rows in data.items():
@@ -257,10 +259,17 @@ def rescored(result, where: str) -> dict:
   if not isinstance(result, dict) or 'runs' not in result:
     raise ResultsError(f'{where} holds no per-run counts (written before mvcoba-eval kept '
                        'them); evaluate it again')
+  runs = result['runs']
+  if not isinstance(runs, dict) or not runs or not all(
+      isinstance(logs, list) and logs for logs in runs.values()):
+    raise ResultsError(f'{where}.runs: expected each case\'s list of run logs')
   try:
-    by_case = {name: [metrics.RunLog(**log) for log in logs]
-               for name, logs in result['runs'].items()}
-  except (TypeError, AttributeError) as e:
-    raise ResultsError(f'{where}: a run log is malformed ({e})') from None
-  return scored(by_case, result.get('wall_s')) | (
+    by_case = {name: [metrics.run_log(log, f'{where}.runs.{name}[{i}]')
+                      for i, log in enumerate(logs)] for name, logs in runs.items()}
+  except ValueError as e:
+    raise ResultsError(str(e)) from None
+  wall = result.get('wall_s')
+  if wall is not None and (isinstance(wall, bool) or not isinstance(wall, (int, float))):
+    raise ResultsError(f'{where}.wall_s: expected seconds, got {str(wall)[:40]!r}')
+  return scored(by_case, wall) | (
       {'settings': result['settings']} if 'settings' in result else {})

@@ -31,7 +31,7 @@ import jax
 from tqdm import tqdm
 
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import evaluation, paper, runtime, video, viz
+from mvcoba_jax import evaluation, folders, paper, runtime, video, viz
 from mvcoba_jax import report as report_lib
 from mvcoba_jax.policy import PolicyError, fingerprint, load
 from mvcoba_jax.sim.scenarios import (
@@ -43,15 +43,37 @@ from mvcoba_jax.sim.scenarios import (
 from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites import SUITES, suite_files
 
+# What an evaluation writes to --out: refused to a new one without --resume or --overwrite.
+RESULT_FILES = ('results.json', 'results.md', 'comparison.md', 'visuals', 'videos')
 
-def _output_folder(path: str) -> pathlib.Path | None:
-  """The --out folder, created; None (and the error printed) when it cannot be."""
+
+class UsageError(ValueError):
+  """Arguments that ask for more work than an evaluation can hold."""
+
+
+MAX_ACTIONS_LIMIT = 10_000  # per run: counters and traces grow with it
+MAX_BATCH_RUNS = 4096  # cases x runs of a suite step in one batch, each a whole tabletop
+
+
+def check_work(runs: int, max_actions: int, suites: dict[str, list]) -> None:
+  """Refuses --runs and --max-actions whose work no evaluation could finish or hold, naming the
+  limit, before anything is loaded or compiled."""
+  if not 1 <= max_actions <= MAX_ACTIONS_LIMIT:
+    raise UsageError(f'--max-actions {max_actions}: allowed range [1, {MAX_ACTIONS_LIMIT}]')
+  for name, files in suites.items():
+    if runs < 1 or runs * len(files) > MAX_BATCH_RUNS:
+      raise UsageError(f'--runs {runs} x {len(files)} cases of suite {name}: between 1 and '
+                       f'{MAX_BATCH_RUNS} runs of a suite step in one batch')
+
+
+def _output_folder(path: str, keep: bool, overwrite: bool) -> pathlib.Path | None:
+  """The --out folder, created and locked; None (and the error printed) when it cannot be, is
+  in use, or holds results this invocation would replace unasked."""
   try:
-    pathlib.Path(path).mkdir(parents=True, exist_ok=True)
-  except OSError as e:
-    print(f'error: --out {path}: {e.strerror}', file=sys.stderr)
+    return folders.claim(path, RESULT_FILES, keep=keep, overwrite=overwrite)
+  except folders.FolderError as e:
+    print(f'error: --out {e}', file=sys.stderr)
     return None
-  return pathlib.Path(path)
 
 
 def main(argv=None) -> int:
@@ -80,6 +102,8 @@ def main(argv=None) -> int:
                            'from the trained weights and takes one SGD step after each of its '
                            'actions (rows labelled [online]); default: the trained network, '
                            'frozen')
+  parser.add_argument('--overwrite', action='store_true',
+                      help="replace --out's earlier results (refused otherwise)")
   parser.add_argument('--save-visuals', action='store_true',
                       help='write a PNG strip of heightmaps and actions per run')
   parser.add_argument('--video', action='store_true',
@@ -94,17 +118,16 @@ def main(argv=None) -> int:
                            'settles, or move more than 1 cm from where the file puts them on '
                            'the table')
   args = parser.parse_args(argv)
-  if args.runs < 1 or args.max_actions < 1:
-    parser.error('--runs and --max-actions must be at least 1')
   if args.tables:
     if args.checkpoint or args.baseline:
       parser.error('--tables joins earlier results; give it without --checkpoint or --baseline')
     try:
+      folders.check(args.out, RESULT_FILES, overwrite=args.overwrite)
       report = report_lib.joined_report(args.tables)
-    except report_lib.ResultsError as e:
+    except (report_lib.ResultsError, folders.FolderError) as e:
       print(f'error: {e}', file=sys.stderr)
       return 2
-    out = _output_folder(args.out)
+    out = _output_folder(args.out, keep=False, overwrite=args.overwrite)
     if out is None:
       return 2
     print(report_lib.write_report(report, out))
@@ -112,11 +135,15 @@ def main(argv=None) -> int:
     print(f'wrote {out / "results.json"}, {out / "results.md"} and {out / "comparison.md"} '
           '(beside the paper)')
     return 0
+  if args.resume and args.overwrite:
+    parser.error('--resume keeps the rows of --out and --overwrite replaces them: give one')
   if not args.checkpoint and not args.baseline:
     parser.error('give --checkpoint DIR ..., --baseline heuristic or --tables EVAL_DIR ...')
   if args.online and args.baseline:
     parser.error('--online needs a trained network to go on learning; --baseline has none')
   try:  # everything that can be wrong with the input fails here, before any compile
+    folders.check(args.out, RESULT_FILES, keep=args.resume, overwrite=args.overwrite)
+    check_work(args.runs, args.max_actions, suite_files(args.suite))
     base = config_lib.from_arguments(args)
     bounds = base.scene.workspace_half, base.scene.workspace_top
     tables = dict(b.rpartition('=')[::2] for b in args.blocks)  # suite ('' for all) -> table
@@ -143,7 +170,8 @@ def main(argv=None) -> int:
         for label, source, path, training in zip(labels, sources, args.checkpoint + [None],
                                                  trained)}
     report = report_lib.kept_rows(pathlib.Path(args.out), settings) if args.resume else {}
-  except (config_lib.ConfigError, ScenarioError, PolicyError, report_lib.ResultsError) as e:
+  except (config_lib.ConfigError, ScenarioError, PolicyError, report_lib.ResultsError,
+          UsageError, folders.FolderError) as e:
     print(f'error: {e}', file=sys.stderr)
     return 2
   if bad and not args.allow_bad_cases:
@@ -155,8 +183,14 @@ def main(argv=None) -> int:
     if parked:
       print(f'{suite}: {parked} lines of its VPG files lie outside VPG\'s workspace (objects VPG '
             'parked) and are not in play')
-  out = _output_folder(args.out)
+  out = _output_folder(args.out, keep=args.resume, overwrite=args.overwrite)
   if out is None:
+    return 2
+  bad_outputs = [name for name, wanted in (('visuals', args.save_visuals), ('videos', args.video))
+                 if wanted and (out / name).exists() and not (out / name).is_dir()]
+  if bad_outputs:
+    print(f'error: --out {out}: {", ".join(bad_outputs)} is a file, where the runs\' pictures '
+          'go', file=sys.stderr)
     return 2
   runtime.setup()
   for suite, cases in suites.items():

@@ -27,7 +27,7 @@ import numpy as np
 from tqdm import tqdm
 
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import methods, runtime, sharding
+from mvcoba_jax import folders, methods, runtime, sharding
 from mvcoba_jax.checkpoint import (
   CheckpointError,
   Checkpoints,
@@ -56,6 +56,8 @@ def parse(argv):
                       help='a sweep: train with each of these seeds (and each of --methods)')
   parser.add_argument('--workdir', default='runs/train', help='output folder')
   parser.add_argument('--resume', action='store_true', help='continue from the latest checkpoint')
+  parser.add_argument('--overwrite', action='store_true',
+                      help='delete an earlier run in --workdir and start anew (refused otherwise)')
   parser.add_argument('--distributed', action='store_true',
                       help='join the other processes with jax.distributed.initialize() before '
                            'anything else; cluster settings come from the environment (SLURM, '
@@ -69,6 +71,8 @@ def parse(argv):
   cluster = (args.coordinator, args.num_processes, args.process_id)
   if not args.distributed and any(v is not None for v in cluster):
     parser.error('--coordinator, --num-processes and --process-id need --distributed')
+  if args.resume and args.overwrite:
+    parser.error('--resume continues a run and --overwrite replaces it: give one')
   if args.method and args.methods or args.seed is not None and args.seeds:
     parser.error('give --method/--seed for one run or --methods/--seeds for a sweep, not both')
   sweep = bool(args.methods or args.seeds)
@@ -127,6 +131,11 @@ def finished(workdir: pathlib.Path, config) -> bool:
           and (workdir / 'eval_summary.json').is_file())
 
 
+# What a run leaves in its work directory: refused to a new run without --resume or --overwrite.
+RUN_FILES = ('config.json', 'actions.jsonl', 'metrics.jsonl', 'checkpoints', 'eval_summary.json',
+             'curves.png')
+
+
 def train(args, config, workdir: pathlib.Path, resume: bool) -> int:
   """One training run into `workdir` (resumed from its latest checkpoint with `resume`)."""
   if resume and not holds_checkpoint(workdir):  # before anything is created or compiled
@@ -139,7 +148,11 @@ def train(args, config, workdir: pathlib.Path, resume: bool) -> int:
   except ValueError as e:
     print(f'error: {e}', file=sys.stderr)
     return 2
-  workdir.mkdir(parents=True, exist_ok=True)
+  try:
+    folders.claim(workdir, RUN_FILES, keep=resume, overwrite=args.overwrite)
+  except folders.FolderError as e:
+    print(f'error: {e}', file=sys.stderr)
+    return 2
   runtime.setup()
   checkpoints = Checkpoints(workdir)  # every process takes part in saving its shards
   lead = jax.process_index() == 0  # the one process that writes logs and curves
@@ -163,10 +176,6 @@ def train(args, config, workdir: pathlib.Path, resume: bool) -> int:
       write_records(actions_path, records, 'w')
     print(f'resumed from {checkpoints.directory} at action {int(state.actions)}')
   else:
-    if checkpoints.latest() is not None:
-      print(f'error: {workdir} already holds checkpoints; pass --resume or another --workdir',
-            file=sys.stderr)
-      return 2
     records = []
     if lead:
       write_records(actions_path, [], 'w')

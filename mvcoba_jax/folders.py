@@ -1,0 +1,90 @@
+"""Output folders that commands write: one process at a time, and nothing replaced unasked.
+
+A command takes `claim(folder, ...)` before it writes there: the folder is created, locked for
+the life of the process (an advisory `fcntl` lock on `.lock`, released by the kernel however
+the process ends, so a killed run leaves no stale lock), and refused when it holds results of an
+earlier invocation that the command would replace, unless the user said so.
+"""
+from __future__ import annotations
+
+import fcntl
+import os
+import pathlib
+import shutil
+
+LOCK_NAME = '.lock'
+_held: dict[pathlib.Path, object] = {}  # folder -> its open lock file, kept for the process
+
+
+class FolderError(RuntimeError):
+  """A folder that cannot be written: not a folder, in use, or holding results to keep."""
+
+
+def check(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: bool = False,
+          keep_flag: str = '--resume') -> pathlib.Path:
+  """What `claim` would refuse, found without creating or changing anything: a file in the
+  folder's place, a folder that another process holds, or one that holds any of `earlier` (the
+  files an earlier invocation leaves) when neither `keep` nor `overwrite` says what to do."""
+  path = pathlib.Path(folder)
+  if path.exists() and not path.is_dir():
+    raise FolderError(f'{path} is a file, not a folder')
+  if not path.is_dir():
+    return path
+  if path.resolve() not in _held:
+    try:
+      with open(path / LOCK_NAME, 'a+') as lock_file:
+        fcntl.flock(lock_file, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        fcntl.flock(lock_file, fcntl.LOCK_UN)
+    except BlockingIOError:
+      raise FolderError(f'{path} is in use by another mvcoba-jax process; wait for it to end or '
+                        'choose another folder') from None
+    except OSError as e:
+      raise FolderError(f'{path}: {e.strerror}') from None
+  found = [name for name in earlier if (path / name).exists()]
+  if found and not keep and not overwrite:
+    raise FolderError(f'{path} holds results of an earlier run ({", ".join(found)}); pass '
+                      f'{keep_flag} to keep them, --overwrite to replace them, or choose '
+                      'another folder')
+  return path
+
+
+def claim(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: bool = False,
+          keep_flag: str = '--resume') -> pathlib.Path:
+  """`folder`, created and locked for this process, after `check`; with `overwrite` (and not
+  `keep`) the `earlier` files it holds are deleted first."""
+  path = check(folder, earlier, keep, overwrite, keep_flag)
+  try:
+    path.mkdir(parents=True, exist_ok=True)
+  except OSError as e:
+    raise FolderError(f'{path}: {e.strerror}') from None
+  key = path.resolve()
+  if key not in _held:
+    try:
+      lock_file = open(path / LOCK_NAME, 'a+')  # noqa: SIM115 (held open for the process)
+      fcntl.flock(lock_file, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+      lock_file.close()
+      raise FolderError(f'{path} is in use by another mvcoba-jax process; wait for it to end or '
+                        'choose another folder') from None
+    except OSError as e:
+      raise FolderError(f'{path}: {e.strerror}') from None
+    lock_file.seek(0)
+    lock_file.truncate()
+    lock_file.write(f'{os.getpid()}\n')
+    lock_file.flush()
+    _held[key] = lock_file
+  if not keep:
+    for name in earlier:
+      target = path / name
+      if target.is_dir():
+        shutil.rmtree(target)
+      elif target.exists():
+        target.unlink()
+  return path
+
+
+def release(folder) -> None:
+  """Unlocks a folder this process claimed (a process's locks also end with it)."""
+  lock_file = _held.pop(pathlib.Path(folder).resolve(), None)
+  if lock_file is not None:
+    lock_file.close()

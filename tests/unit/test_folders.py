@@ -1,0 +1,82 @@
+"""Output folders: one process at a time, nothing replaced unasked, and the commands' refusals,
+all before anything is compiled."""
+import json
+import subprocess
+import sys
+import time
+
+import pytest
+
+from mvcoba_jax import folders
+from mvcoba_jax.cli import eval as eval_cli
+from mvcoba_jax.cli import train as train_cli
+
+
+def test_a_folder_with_earlier_results_is_kept_replaced_or_refused(tmp_path):
+  out = tmp_path / 'out'
+  folders.claim(out, ('results.json',))
+  (out / 'results.json').write_text('{}')
+  folders.release(out)
+  with pytest.raises(folders.FolderError, match=r'results.json\); pass --resume to keep them, '
+                                                '--overwrite to replace them'):
+    folders.claim(out, ('results.json',))
+  assert (out / 'results.json').read_text() == '{}'
+  folders.claim(out, ('results.json',), keep=True)
+  assert (out / 'results.json').exists()
+  folders.release(out)
+  folders.claim(out, ('results.json',), overwrite=True)
+  assert not (out / 'results.json').exists()
+  folders.release(out)
+  (tmp_path / 'file').write_text('')
+  with pytest.raises(folders.FolderError, match='is a file, not a folder'):
+    folders.claim(tmp_path / 'file')
+
+
+def test_a_folder_in_use_by_another_process_is_refused_until_it_ends(tmp_path):
+  holder = subprocess.Popen(
+      [sys.executable, '-c', 'import sys, time\nfrom mvcoba_jax import folders\n'
+       f'folders.claim({str(tmp_path / "w")!r})\nprint("held", flush=True)\ntime.sleep(60)'],
+      stdout=subprocess.PIPE, text=True)
+  try:
+    assert holder.stdout.readline().strip() == 'held'
+    with pytest.raises(folders.FolderError, match='in use by another mvcoba-jax process'):
+      folders.check(tmp_path / 'w')
+    code = train_cli.main(['--config', 'tiny', '--workdir', str(tmp_path / 'w')])
+    assert code == 2
+  finally:
+    holder.kill()
+    holder.wait()
+  time.sleep(0.1)
+  folders.claim(tmp_path / 'w')  # a killed holder leaves no stale lock
+  folders.release(tmp_path / 'w')
+
+
+def test_commands_refuse_to_replace_earlier_results_before_compiling(tmp_path, capsys):
+  run = tmp_path / 'run'
+  run.mkdir()
+  (run / 'actions.jsonl').write_text('{"action": 0}\n')  # an earlier run without a checkpoint
+  started = time.perf_counter()
+  assert train_cli.main(['--config', 'tiny', '--workdir', str(run)]) == 2
+  assert 'actions.jsonl); pass --resume' in capsys.readouterr().err
+  assert (run / 'actions.jsonl').read_text() == '{"action": 0}\n'
+  out = tmp_path / 'eval'
+  out.mkdir()
+  (out / 'results.json').write_text(json.dumps({'random': {}}))
+  assert eval_cli.main(['--baseline', 'heuristic', '--suite', 'isolated', '--config', 'tiny',
+                        '--out', str(out)]) == 2
+  assert 'results.json); pass --resume' in capsys.readouterr().err
+  assert json.loads((out / 'results.json').read_text()) == {'random': {}}
+  assert eval_cli.main(['--tables', str(out), '--out', str(out)]) == 2
+  assert '--overwrite to replace them' in capsys.readouterr().err
+  assert time.perf_counter() - started < 20  # refused before any compile
+
+
+@pytest.mark.parametrize('argv, says', [
+    (['--max-actions', '1000000000000'], '--max-actions 1000000000000: allowed range [1, 10000]'),
+    (['--runs', '1000000000'], '--runs 1000000000 x 16 cases of suite isolated'),
+    (['--runs', '0'], '--runs 0 x 16 cases'),
+])
+def test_evaluation_work_is_bounded_before_anything_loads(tmp_path, capsys, argv, says):
+  assert eval_cli.main(['--baseline', 'heuristic', '--suite', 'isolated', '--config', 'tiny',
+                        '--out', str(tmp_path / 'o'), *argv]) == 2
+  assert says in capsys.readouterr().err and not (tmp_path / 'o').exists()
