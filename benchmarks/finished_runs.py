@@ -48,7 +48,7 @@ def step_cost(suite: str, repeats: int) -> dict:
   @jax.jit
   def action(states, key):
     obs = task.observe(env, states)
-    chosen = policy(obs, jnp.ones(n, bool), jax.random.split(key, n))
+    chosen = policy(obs, jnp.ones(n, bool), jax.random.split(key, n), None)
     return task.step(env, (0, 1), states, obs, jnp.zeros(n, jnp.int32), chosen,
                      config.train)
 

@@ -37,9 +37,12 @@ from mvcoba_jax.sim.tabletop import EnvState, Layout, Tabletop, where_envs
 POSITION_NOISE = 0.002  # m, per axis, on each object's start position
 YAW_NOISE = 0.035  # rad (2 deg)
 
-# policy(obs (N,), changed (N,), keys (N, 2)) -> agent.PixelAction; per-run keys keep each run's
-# draws independent of the batch it is evaluated in.
-Policy = Callable[[perception.Observation, jnp.ndarray, jnp.ndarray], agent.PixelAction]
+# policy(obs (N,), changed (N,), keys (N, 2), failed) -> agent.PixelAction; per-run keys keep
+# each run's draws independent of the batch it is evaluated in; `failed` is each run's failed
+# actions since the scene last changed, (N, F, 4: primitive, rotation, row, col) and how many
+# of them hold one (N,), for a policy that avoids repeating them.
+Policy = Callable[[perception.Observation, jnp.ndarray, jnp.ndarray,
+                   tuple[jnp.ndarray, jnp.ndarray]], agent.PixelAction]
 
 
 @struct.dataclass
@@ -261,7 +264,7 @@ def advance(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch,
       action, q = policy.act(learner, obs, batch.changed)
       learner = policy.learn(learner, q, batch.changed, active)
     else:
-      action = policy(obs, batch.changed, k_act)
+      action = policy(obs, batch.changed, k_act, (runs.failed, runs.tried))
     next_states, next_obs, out = task.step(env, views, states, obs, runs.failures, action,
                                             env.config.train)
     if online:
@@ -387,20 +390,33 @@ def losses(trace: Trace, names: list[str], config: Config) -> list[dict]:
   return records
 
 
-def greedy_policy(q_maps: Callable, method: str, config) -> Policy:
-  """A trained network's greedy policy: `q_maps(obs)` -> (N, 2, K, R, R)."""
+def greedy_policy(q_maps: Callable, method: str, config, no_repeat: bool = False) -> Policy:
+  """A trained network's greedy policy: `q_maps(obs)` -> (N, 2, K, R, R). With `no_repeat` it
+  never takes a failed action of its run again while nothing has changed: the next best one."""
   views = networks.views_used(method)
 
-  def policy(obs, changed, keys):
+  def policy(obs, changed, keys, failed):
     maps = agent.rule_maps(q_maps(obs), obs.depth, views, method, config)
+    if no_repeat:
+      maps = without(maps, *failed)
     return agent.greedy_actions(maps, changed, method)
   return policy
+
+
+def without(maps, failed, tried):
+  """`maps` (N, 2, K, R, R) with the first `tried` (N,) of each run's `failed` actions (N, F, 4)
+  scored -inf."""
+  runs = jnp.arange(maps.shape[0])
+  for j in range(failed.shape[1]):
+    p, k, r, c = (failed[:, j, i] for i in range(4))
+    maps = maps.at[runs, p, k, r, c].set(jnp.where(j < tried, -jnp.inf, maps[runs, p, k, r, c]))
+  return maps
 
 
 def heuristic_policy(num_rotations: int) -> Policy:
   """A baseline that needs no training: grasp the highest cell at a random rotation; after an
   action that changed nothing, push from the highest cell in a random direction."""
-  def policy(obs, changed, keys):
+  def policy(obs, changed, keys, failed):
     height = jnp.max(obs.depth, axis=1)  # (N, R, R) over both views
     n, r, _ = height.shape
     cell = jnp.argmax(height.reshape(n, -1), axis=-1)
@@ -484,9 +500,9 @@ def source_name(method_source) -> str:
   return method_source[0].network.method
 
 
-def make_policy(method_source, config, online: bool = False):
+def make_policy(method_source, config, online: bool = False, no_repeat: bool = False):
   """(policy, views) of a checkpoint or a baseline; with `online`, a checkpoint's
-  `OnlinePolicy`."""
+  `OnlinePolicy`; with `no_repeat`, its greedy policy that never repeats a failed action."""
   if isinstance(method_source, str):  # a baseline
     return heuristic_policy(config.env.num_rotations), (0, 1)
   config, model, _ = method_source
@@ -495,4 +511,4 @@ def make_policy(method_source, config, online: bool = False):
   graphdef, params = nnx.split(model)
   method = config.network.method
   q_maps = lambda obs: nnx.merge(graphdef, params)(obs.color, obs.depth)
-  return greedy_policy(q_maps, method, config), networks.views_used(method)
+  return greedy_policy(q_maps, method, config, no_repeat), networks.views_used(method)

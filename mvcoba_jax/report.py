@@ -101,17 +101,18 @@ def _flat(tree, prefix=''):
 def training_groups(rows: dict[str, dict]) -> dict[str, list[str]]:
   """Rows that are one method trained with one config except its seed, named: the method, or
   when it was trained in several configs, the method and the fields where its config differs
-  from the value most of them hold (`mvcoba {train.gamma=0.2}`); rows evaluated online
-  (`--online`) group apart (`mvcoba [online]`). A training seed met again in a config (one
+  from the value most of them hold (`mvcoba {train.gamma=0.2}`); rows evaluated under another
+  protocol than frozen group apart (`mvcoba [online]`, `mvcoba [no-repeat]`). A training seed met again in a config (one
   policy evaluated from two folders) goes to a group of its own, so an interval never counts a
   seed twice. Rows read from results written before evaluation recorded the training config
   (`settings.training`) form a group of their own per method."""
   found, seeds = {}, {}
   for label, result in rows.items():
-    settings = result.get('settings') or {}
+    settings = result.get('settings') if isinstance(result.get('settings'), dict) else {}
     training = settings.get('training')
     key = json.dumps(training, sort_keys=True) if isinstance(training, dict) else None
-    method = method_of(label) + (' [online]' if settings.get('protocol') == 'online' else '')
+    protocol = str(settings.get('protocol', 'frozen'))[:20]
+    method = method_of(label) + (f' [{protocol}]' if protocol != 'frozen' else '')
     seen = seeds.setdefault((method, key), [])
     again = seen.count(settings.get('training_seed')) if key is not None else 0
     seen.append(settings.get('training_seed'))
@@ -187,14 +188,29 @@ def loss_summary(lost: list[dict]) -> str:
 
 
 def write_report(report: dict, out: pathlib.Path) -> str:
-  """Writes results.json and results.md (each replaced whole, never half written); the Markdown."""
+  """Writes results.json and results.md (each replaced whole, never half written); the Markdown.
+
+  Raises ResultsError when a file cannot be written (a full disk): the earlier one is intact.
+  """
   text = '\n\n'.join(t for suite, rows in report.items() for t in suite_tables(suite, rows)) + '\n'
   for name, content in (('results.json', json.dumps(json_safe(report), indent=1)),
                         ('results.md', text)):
-    partial = out / f'.{name}.partial'
-    partial.write_text(content)
-    os.replace(partial, out / name)
+    write_whole(out / name, content)
   return text
+
+
+def write_whole(path: pathlib.Path, content: str) -> None:
+  """`path` replaced by `content` at once, or left as it was (ResultsError) when the disk or a
+  file size limit refuses the write."""
+  partial = path.with_name(f'.{path.name}.partial')
+  try:
+    partial.write_text(content)
+    os.replace(partial, path)
+  except OSError as e:
+    partial.unlink(missing_ok=True)
+    raise ResultsError(f'cannot write {path} ({e.strerror}); '
+                       f'{"the earlier one is intact" if path.exists() else "nothing written"}'
+                       ) from None
 
 
 def kept_rows(out: pathlib.Path, settings: dict[tuple[str, str], dict]) -> dict:

@@ -1,7 +1,7 @@
 """Evaluates trained policies (or a baseline) on test suites and prints the paper's tables.
 
   mvcoba-eval --checkpoint runs/train [runs/vpg ...] [--suite random|ordered|occluded|isolated|vpg|all|PATH ...]
-              [--runs 5] [--max-actions 60] [--out eval_out] [--resume] [--online]
+              [--runs 5] [--max-actions 60] [--out eval_out] [--resume] [--online|--no-repeat]
               [--save-visuals] [--video]
   mvcoba-eval --baseline heuristic --suite ordered        # no checkpoint needed
   mvcoba-eval --compare runs/mvcoba runs/vpg ...          # same as several --checkpoint
@@ -102,6 +102,10 @@ def main(argv=None) -> int:
                            'from the trained weights and takes one SGD step after each of its '
                            'actions (rows labelled [online]); default: the trained network, '
                            'frozen')
+  parser.add_argument('--no-repeat', action='store_true',
+                      help='frozen, but a run never takes a failed action of its own again while '
+                           'nothing has changed (its next best one instead; rows labelled '
+                           '[no-repeat]): beyond the paper')
   parser.add_argument('--overwrite', action='store_true',
                       help="replace --out's earlier results (refused otherwise)")
   parser.add_argument('--save-visuals', action='store_true',
@@ -130,8 +134,12 @@ def main(argv=None) -> int:
     out = _output_folder(args.out, keep=False, overwrite=args.overwrite)
     if out is None:
       return 2
-    print(report_lib.write_report(report, out))
-    (out / 'comparison.md').write_text(paper.comparisons(report) + '\n')
+    try:
+      print(report_lib.write_report(report, out))
+      report_lib.write_whole(out / 'comparison.md', paper.comparisons(report) + '\n')
+    except report_lib.ResultsError as e:
+      print(f'error: {e}', file=sys.stderr)
+      return 2
     print(f'wrote {out / "results.json"}, {out / "results.md"} and {out / "comparison.md"} '
           '(beside the paper)')
     return 0
@@ -139,8 +147,12 @@ def main(argv=None) -> int:
     parser.error('--resume keeps the rows of --out and --overwrite replaces them: give one')
   if not args.checkpoint and not args.baseline:
     parser.error('give --checkpoint DIR ..., --baseline heuristic or --tables EVAL_DIR ...')
-  if args.online and args.baseline:
-    parser.error('--online needs a trained network to go on learning; --baseline has none')
+  if (args.online or args.no_repeat) and args.baseline:
+    parser.error('--online and --no-repeat change how a trained network acts; --baseline has '
+                 'none')
+  if args.online and args.no_repeat:
+    parser.error('--no-repeat is a frozen protocol; give it or --online')
+  protocol = 'online' if args.online else 'no-repeat' if args.no_repeat else 'frozen'
   try:  # everything that can be wrong with the input fails here, before any compile
     folders.check(args.out, RESULT_FILES, keep=args.resume, overwrite=args.overwrite)
     check_work(args.runs, args.max_actions, suite_files(args.suite))
@@ -158,14 +170,14 @@ def main(argv=None) -> int:
     source_names = [evaluation.source_name(s) for s in sources]
     labels = (report_lib.row_labels(args.checkpoint, source_names[:len(args.checkpoint)])
               + source_names[len(args.checkpoint):])
-    if args.online:
-      labels = [f'{label} [online]' for label in labels]
+    if protocol != 'frozen':
+      labels = [f'{label} [{protocol}]' for label in labels]
     settings = {(suite, label): {
         'checkpoint': path, 'step': None if isinstance(source, str) else source[2],
         'params': None if isinstance(source, str) else fingerprint(source[1]),
         'cases': [c.name for c in cases], 'runs': args.runs, 'max_actions': args.max_actions,
         'seed': args.seed, 'set': args.overrides, 'training': training[0],
-        'training_seed': training[1], 'protocol': 'online' if args.online else 'frozen'}
+        'training_seed': training[1], 'protocol': protocol}
         for suite, cases in suites.items()
         for label, source, path, training in zip(labels, sources, args.checkpoint + [None],
                                                  trained)}
@@ -193,17 +205,30 @@ def main(argv=None) -> int:
           'go', file=sys.stderr)
     return 2
   runtime.setup()
+  try:
+    evaluate_suites(args, suites, dict(zip(labels, sources)), base, settings, report, out)
+  except report_lib.ResultsError as e:
+    print(f'error: {e}', file=sys.stderr)
+    return 2
+  print(f'\nwrote {out / "results.json"} and {out / "results.md"}')
+  return 0
+
+
+def evaluate_suites(args, suites: dict, policies: dict, base, settings: dict, report: dict,
+                    out: pathlib.Path) -> None:
+  """Evaluates every policy (label -> source) on every suite that `report` does not hold yet,
+  rewriting --out's results after each row; prints each suite's tables."""
   for suite, cases in suites.items():
     names = [c.name for c in cases]
     rows = report.setdefault(suite, {})
-    for label, source in zip(labels, sources):
+    for label, source in policies.items():
       if label in rows:
         print(f'{suite}: {label}: kept from {out / "results.json"}', flush=True)
         continue
       config = base if isinstance(source, str) else source[0]
       env = Tabletop(evaluation.suite_config(config, evaluation.pool_for(cases)),
                      frames=video.FRAMES_PER_PRIMITIVE if args.video else 0)
-      policy, views = evaluation.make_policy(source, env.config, args.online)
+      policy, views = evaluation.make_policy(source, env.config, args.online, args.no_repeat)
       layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(args.runs)])
       keys = jax.random.split(jax.random.PRNGKey(args.seed), len(cases) * args.runs)
       print(f'{suite}: {label}, {len(cases)} cases x {args.runs} runs, up to '
@@ -240,8 +265,6 @@ def main(argv=None) -> int:
     for text in report_lib.suite_tables(suite, report_lib.in_order(report, settings)[suite]):
       print('\n' + text)
   report_lib.write_report(report_lib.in_order(report, settings), out)
-  print(f'\nwrote {out / "results.json"} and {out / "results.md"}')
-  return 0
 
 
 if __name__ == '__main__':

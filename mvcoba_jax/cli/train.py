@@ -148,8 +148,11 @@ def train(args, config, workdir: pathlib.Path, resume: bool) -> int:
   except ValueError as e:
     print(f'error: {e}', file=sys.stderr)
     return 2
-  try:
-    folders.claim(workdir, RUN_FILES, keep=resume, overwrite=args.overwrite)
+  try:  # the lead process holds the folder; the others of a distributed run write beside it
+    if jax.process_index() == 0:
+      folders.claim(workdir, RUN_FILES, keep=resume, overwrite=args.overwrite)
+    else:
+      workdir.mkdir(parents=True, exist_ok=True)
   except folders.FolderError as e:
     print(f'error: {e}', file=sys.stderr)
     return 2

@@ -324,7 +324,7 @@ def test_repeated_failed_actions_are_counted_per_run(setup):
   in between. The heuristic, whose rotation is drawn anew, repeats nothing exactly here."""
   _, env, _, layouts, keys, heuristic = setup
   zeros = lambda obs: jnp.zeros(obs.depth.shape[0], jnp.int32)
-  stubborn = lambda obs, changed, keys: agent.PixelAction(
+  stubborn = lambda obs, changed, keys, failed: agent.PixelAction(
       primitive=zeros(obs) + agent.GRASP, rotation=zeros(obs), row=zeros(obs), col=zeros(obs))
   runs = evaluation.evaluate(env, stubborn, (0, 1), layouts, keys, 10)
   logs = evaluation.run_logs(runs)
@@ -378,3 +378,21 @@ def test_a_finished_run_learns_no_more(online):
   for runs in (short, long):
     assert all(np.array_equal(a, b) for a, b in zip(params(runs, 0), start))
   assert any(not np.array_equal(a, b) for a, b in zip(params(short, 1), params(long, 1)))
+
+
+def test_no_repeat_takes_the_next_best_action_instead_of_a_failed_one(setup):
+  """Maps that score the bare corner cells best, in order: the greedy policy grasps at the same
+  cell until the failure rule ends the run; with `no_repeat` it moves on to the next best cell
+  after each failure, repeating none."""
+  _, env, _, layouts, keys, _ = setup
+  r = perception.grid_size(env.config)
+  ramp = -jnp.arange(r * r, dtype=jnp.float32).reshape(r, r)
+  q_maps = lambda obs: jnp.broadcast_to(ramp, (obs.depth.shape[0], 2, 1, r, r))
+  logs = {}
+  for no_repeat in (False, True):
+    policy = evaluation.greedy_policy(q_maps, 'grasp_only', env.config, no_repeat)
+    logs[no_repeat] = evaluation.run_logs(evaluation.evaluate(env, policy, (0, 1), layouts,
+                                                              keys, 10))
+  attempts = env.config.env.max_failures + 1
+  assert [(g.actions, g.repeated_failures) for g in logs[False]] == [(attempts, attempts - 1)] * 2
+  assert [(g.actions, g.repeated_failures) for g in logs[True]] == [(attempts, 0)] * 2

@@ -80,3 +80,21 @@ def test_evaluation_work_is_bounded_before_anything_loads(tmp_path, capsys, argv
   assert eval_cli.main(['--baseline', 'heuristic', '--suite', 'isolated', '--config', 'tiny',
                         '--out', str(tmp_path / 'o'), *argv]) == 2
   assert says in capsys.readouterr().err and not (tmp_path / 'o').exists()
+
+
+def test_a_results_file_that_cannot_be_written_leaves_the_earlier_one(tmp_path):
+  """A file size limit (as a full disk would) refuses the new results.json: one line says so and
+  the earlier file is as it was."""
+  (tmp_path / 'results.json').write_text('{"earlier": 1}')
+  code = ('import resource, signal, pathlib\n'
+          'from mvcoba_jax import report\n'
+          'signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n'
+          'resource.setrlimit(resource.RLIMIT_FSIZE, (64, 64))\n'
+          'try:\n'
+          f'  report.write_whole(pathlib.Path({str(tmp_path / "results.json")!r}), "x" * 4096)\n'
+          'except report.ResultsError as e:\n'
+          '  print(e)\n')
+  out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, timeout=120)
+  assert 'results.json (File too large); the earlier one is intact' in out.stdout, out.stderr
+  assert (tmp_path / 'results.json').read_text() == '{"earlier": 1}'
+  assert not list(tmp_path.glob('.*.partial'))

@@ -1,0 +1,77 @@
+"""The recipe study's table: per variant, each validation suite's grasp success, completion and
+objects picked, mean over seeds and cases with the 95% stratified bootstrap interval over seeds,
+and the training time, from what `recipe_study.py` wrote.
+
+  python experiments/recipe_table.py [--workdir runs/recipe] [--metrics grasp_success ...]
+
+Prints Markdown; a variant evaluated from one seed so far gets its mean and no interval.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import pathlib
+import statistics
+
+from recipe_study import ROOT, VARIANTS
+
+from mvcoba_jax import report
+
+METRICS = ('grasp_success', 'completion', 'objects_picked')
+
+
+def training_minutes(log: pathlib.Path) -> dict[str, float]:
+  """variant -> median minutes of its finished training runs (study.jsonl)."""
+  times = {}
+  for line in log.read_text().splitlines():
+    entry = json.loads(line)
+    if entry['what'].startswith('train-') and entry['rc'] == 0:
+      variant = entry['what'][len('train-'):].rsplit('-s', 1)[0]
+      times.setdefault(variant, []).append(entry['wall_s'] / 60)
+  return {v: statistics.median(t) for v, t in times.items()}
+
+
+def cell(entry) -> str:
+  if entry is None:
+    return '-'
+  point, low, high = entry
+  return f'{point:.1f}' if math.isnan(low) else f'{point:.1f} [{low:.1f}, {high:.1f}]'
+
+
+def table(work: pathlib.Path, metrics=METRICS) -> str:
+  evaluations = {}
+  for folder in sorted((work / 'eval').iterdir()):
+    if (folder / 'done').is_file():
+      evaluations.setdefault(folder.name.rsplit('-s', 1)[0], []).append(str(folder))
+  minutes = training_minutes(work / 'study.jsonl')
+  suites = None
+  lines = []
+  for variant in [v for v in VARIANTS if v in evaluations]:
+    joined = report.joined_report(evaluations[variant])
+    suites = suites or list(joined)
+    cells = []
+    for suite in suites:
+      over = report.seed_intervals(joined.get(suite, {}), minimum=1)
+      entry = next(iter(over.values()), {})
+      cells += [cell(entry.get(m)) for m in metrics]
+    seeds = len(evaluations[variant])
+    lines.append(f'| {variant} | {seeds} | ' + ' | '.join(cells)
+                 + f' | {minutes.get(variant, math.nan):.1f} |')
+  names = [pathlib.Path(s).name for s in suites or []]
+  head = ('| variant | seeds | ' + ' | '.join(f'{s}: {m.replace("_", " ")}' for s in names
+                                             for m in metrics)
+          + ' | training (min) |\n|---|---|' + '---|' * (len(names) * len(metrics) + 1))
+  return '\n'.join([head] + lines)
+
+
+def main():
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument('--workdir', default='runs/recipe')
+  parser.add_argument('--metrics', nargs='+', default=list(METRICS))
+  args = parser.parse_args()
+  print(table((ROOT / args.workdir).resolve(), args.metrics))
+
+
+if __name__ == '__main__':
+  main()

@@ -1,0 +1,56 @@
+"""Generated bad results.json files (fixed seed) given to `mvcoba-eval --tables`: each is
+answered by a clean refusal (exit 2, one short line) or a correct acceptance, never a traceback."""
+import copy
+import json
+import random
+
+from mvcoba_jax.cli import eval as eval_cli
+
+RUN = {'actions': 6, 'grasp_attempts': 5, 'grasp_successes': 4, 'objects': 4, 'picked': 4,
+       'lost': 0, 'completed': True, 'repeated_failures': 1}
+VALID = {'ordered': {'mvcoba': {'wall_s': 3.0, 'runs': {'c0': [RUN, dict(RUN, completed=False,
+                                                                          picked=2)]}}}}
+ODD = [None, 'x', -1, 2 ** 40, 1.5, True, [], {}, [[[]]], float('inf'), '\u00e9' * 50]
+
+
+def _mutants(rng: random.Random):
+  """Bad variants of VALID: a value swapped for an odd one at a random place, a key dropped or
+  added, counts that do not fit, truncations, undecodable bytes and deep nesting."""
+  for _ in range(150):
+    data = copy.deepcopy(VALID)
+    log = data['ordered']['mvcoba']['runs']['c0'][rng.randrange(2)]
+    kind = rng.randrange(5)
+    if kind == 0:
+      log[rng.choice(sorted(log))] = rng.choice(ODD)
+    elif kind == 1:
+      del log[rng.choice(sorted(log))]
+    elif kind == 2:
+      log[rng.choice(['extra', 'seed', ''])] = 1
+    elif kind == 3:
+      log['grasp_successes'] = log['grasp_attempts'] + rng.randrange(1, 100)
+    else:
+      target = rng.choice([data, data['ordered'], data['ordered']['mvcoba']])
+      target[rng.choice(sorted(target))] = rng.choice(ODD)
+    yield json.dumps(data).encode()
+  text = json.dumps(VALID).encode()
+  for cut in rng.sample(range(1, len(text)), 20):
+    yield text[:cut]
+  yield b'\xff\xfe' + text
+  yield b'[' * 100_000 + b']' * 100_000
+  yield b'{"ordered": ' * 5000 + b'{}' + b'}' * 5000
+
+
+def test_fuzzed_results_are_refused_in_one_line_or_accepted(tmp_path, capsys):
+  rng = random.Random(0)
+  outcomes = {0: 0, 2: 0}
+  for i, content in enumerate(_mutants(rng)):
+    folder = tmp_path / f'in{i}'
+    folder.mkdir()
+    (folder / 'results.json').write_bytes(content)
+    code = eval_cli.main(['--tables', str(folder), '--out', str(tmp_path / f'out{i}')])
+    err = capsys.readouterr().err
+    assert code in outcomes, (content[:200], err)
+    outcomes[code] += 1
+    if code == 2:
+      assert err.startswith('error: ') and err.count('\n') == 1 and len(err) < 400, err
+  assert outcomes[2] > 100 and outcomes[0] > 0, outcomes
