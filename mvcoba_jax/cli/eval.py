@@ -33,6 +33,7 @@ from tqdm import tqdm
 from mvcoba_jax import config as config_lib
 from mvcoba_jax import evaluation, folders, paper, runtime, video, viz
 from mvcoba_jax import report as report_lib
+from mvcoba_jax.cli import fail
 from mvcoba_jax.policy import PolicyError, fingerprint, load
 from mvcoba_jax.sim.scenarios import (
   ScenarioError,
@@ -40,6 +41,7 @@ from mvcoba_jax.sim.scenarios import (
   read_case,
   stack_layouts,
 )
+from mvcoba_jax.sim.shapes import BLOCK_TABLES
 from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites import SUITES, suite_files
 
@@ -64,6 +66,24 @@ def check_work(runs: int, max_actions: int, suites: dict[str, list]) -> None:
     if runs < 1 or runs * len(files) > MAX_BATCH_RUNS:
       raise UsageError(f'--runs {runs} x {len(files)} cases of suite {name}: between 1 and '
                        f'{MAX_BATCH_RUNS} runs of a suite step in one batch')
+
+
+def block_tables(given: list[str], suites: list[str]) -> dict[str, str]:
+  """--blocks as suite ('' for every suite) -> block table, each suite named once and among
+  the evaluated ones, each table a known one; UsageError otherwise."""
+  tables = {}
+  for item in given:
+    suite, _, table = item.rpartition('=')
+    if table not in BLOCK_TABLES or '=' in suite:
+      raise UsageError(f'--blocks {item[:80]!r}: expected [SUITE=]TABLE with TABLE one of '
+                       f'{", ".join(BLOCK_TABLES)}')
+    if suite and suite not in suites:
+      raise UsageError(f'--blocks {item[:80]!r}: {suite[:60]!r} is not an evaluated suite '
+                       f'({", ".join(suites)[:120]})')
+    if suite in tables:
+      raise UsageError(f'--blocks names {suite[:60] or "every suite"!r} twice')
+    tables[suite] = table
+  return tables
 
 
 def _output_folder(path: str, keep: bool, overwrite: bool) -> pathlib.Path | None:
@@ -129,8 +149,7 @@ def main(argv=None) -> int:
       folders.check(args.out, RESULT_FILES, overwrite=args.overwrite)
       report = report_lib.joined_report(args.tables)
     except (report_lib.ResultsError, folders.FolderError) as e:
-      print(f'error: {e}', file=sys.stderr)
-      return 2
+      return fail(e)
     out = _output_folder(args.out, keep=False, overwrite=args.overwrite)
     if out is None:
       return 2
@@ -138,8 +157,7 @@ def main(argv=None) -> int:
       print(report_lib.write_report(report, out))
       report_lib.write_whole(out / 'comparison.md', paper.comparisons(report) + '\n')
     except report_lib.ResultsError as e:
-      print(f'error: {e}', file=sys.stderr)
-      return 2
+      return fail(e)
     print(f'wrote {out / "results.json"}, {out / "results.md"} and {out / "comparison.md"} '
           '(beside the paper)')
     return 0
@@ -158,10 +176,11 @@ def main(argv=None) -> int:
     check_work(args.runs, args.max_actions, suite_files(args.suite))
     base = config_lib.from_arguments(args)
     bounds = base.scene.workspace_half, base.scene.workspace_top
-    tables = dict(b.rpartition('=')[::2] for b in args.blocks)  # suite ('' for all) -> table
+    files_of = suite_files(args.suite)
+    tables = block_tables(args.blocks, list(files_of))
     suites = {name: [read_case(f, *bounds, blocks=tables.get(name, tables.get('', 'vpg')))
                      for f in files]
-              for name, files in suite_files(args.suite).items()}
+              for name, files in files_of.items()}
     bad = [m for cases in suites.values() for m in evaluation.case_problems(cases, base)]
     loaded = [load(path) for path in args.checkpoint]
     trained = [(config_lib.trained_as(c), c.seed) for c, _, _ in loaded] + [(None, None)]
@@ -184,12 +203,9 @@ def main(argv=None) -> int:
     report = report_lib.kept_rows(pathlib.Path(args.out), settings) if args.resume else {}
   except (config_lib.ConfigError, ScenarioError, PolicyError, report_lib.ResultsError,
           UsageError, folders.FolderError) as e:
-    print(f'error: {e}', file=sys.stderr)
-    return 2
+    return fail(e)
   if bad and not args.allow_bad_cases:
-    print('error: ' + '\n  '.join(bad) + '\n(--allow-bad-cases evaluates them anyway)',
-          file=sys.stderr)
-    return 2
+    return fail('\n  '.join(bad) + '\n(--allow-bad-cases evaluates them anyway)')
   for suite, cases in suites.items():
     parked = sum(len(c.parked_lines) for c in cases)
     if parked:
@@ -208,8 +224,7 @@ def main(argv=None) -> int:
   try:
     evaluate_suites(args, suites, dict(zip(labels, sources)), base, settings, report, out)
   except report_lib.ResultsError as e:
-    print(f'error: {e}', file=sys.stderr)
-    return 2
+    return fail(e)
   print(f'\nwrote {out / "results.json"} and {out / "results.md"}')
   return 0
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from mvcoba_jax.cli import fail
 from mvcoba_jax.export import export
 from mvcoba_jax.policy import PolicyError
 
@@ -19,8 +20,7 @@ def main(argv=None) -> int:
   try:
     paths = export(args.checkpoint, args.out)
   except PolicyError as e:
-    print(f'error: {e}', file=sys.stderr)
-    return 2
+    return fail(e)
   except OSError as e:  # the output folder cannot be written
     print(f'error: {e.filename}: {e.strerror}', file=sys.stderr)
     return 2

@@ -28,6 +28,7 @@ from mvcoba_jax import config as config_lib
 from mvcoba_jax import folders, methods, paper
 from mvcoba_jax.checkpoint import holds_checkpoint
 from mvcoba_jax.cli import eval as eval_cli
+from mvcoba_jax.cli import fail
 from mvcoba_jax.cli import train as train_cli
 from mvcoba_jax.suites import SUITES, suite_files
 
@@ -84,8 +85,7 @@ def main(argv=None) -> int:
     if pathlib.Path(args.workdir).exists() and not pathlib.Path(args.workdir).is_dir():
       raise folders.FolderError(f'--workdir {args.workdir} is a file, not a folder')
   except (folders.FolderError, eval_cli.UsageError) as e:
-    print(f'error: {e}', file=sys.stderr)
-    return 2
+    return fail(e)
   trainings = len(args.methods) * len(args.seeds)
   cases = sum(len(files) for files in suite_files(args.suites).values())
   expected = (trainings * args.actions / TRAIN_ACTIONS_PER_S

@@ -34,6 +34,7 @@ from mvcoba_jax.checkpoint import (
   holds_checkpoint,
   latest_step,
 )
+from mvcoba_jax.cli import fail
 from mvcoba_jax.run_log import (
   action_records,
   plot_curves,
@@ -146,16 +147,14 @@ def train(args, config, workdir: pathlib.Path, resume: bool) -> int:
     sharding.check_divisible(config.num_envs, devices)
     trainer = Trainer(config, devices)
   except ValueError as e:
-    print(f'error: {e}', file=sys.stderr)
-    return 2
+    return fail(e)
   try:  # the lead process holds the folder; the others of a distributed run write beside it
     if jax.process_index() == 0:
       folders.claim(workdir, RUN_FILES, keep=resume, overwrite=args.overwrite)
     else:
       workdir.mkdir(parents=True, exist_ok=True)
   except folders.FolderError as e:
-    print(f'error: {e}', file=sys.stderr)
-    return 2
+    return fail(e)
   runtime.setup()
   checkpoints = Checkpoints(workdir)  # every process takes part in saving its shards
   lead = jax.process_index() == 0  # the one process that writes logs and curves
@@ -172,8 +171,7 @@ def train(args, config, workdir: pathlib.Path, resume: bool) -> int:
     try:
       state, meta = checkpoints.restore(state, config)
     except CheckpointError as e:
-      print(f'error: {e}', file=sys.stderr)
-      return 2
+      return fail(e)
     records = read_records(actions_path, int(state.actions))
     if lead:
       write_records(actions_path, records, 'w')

@@ -64,6 +64,8 @@ _COMMENT = re.compile(r'^\s*#.*|\s#(\s.*)?$')
 MAX_FILE_BYTES = 1_000_000  # a case file is a few dozen lines
 OCCLUDER_REACH = 1.0  # m: occluders stand within this of the workspace centre, up to this high
 OVERLAP_TOLERANCE = 0.003  # m: deeper interpenetration as placed means a broken case
+SAME_SPOT = 0.005  # m: two objects whose centres are closer than this are placed at one spot
+MAX_CASE_OBJECTS = 128  # objects in one case: each takes an object slot of the compiled scene
 
 
 class ScenarioError(ValueError):
@@ -341,6 +343,10 @@ def read_case(path, workspace_half: float = 0.224, workspace_top: float = 0.4,
     where = (f'; its {len(parked)} lines ({", ".join(map(str, parked[:10]))}) all lie outside '
              'VPG\'s workspace, where VPG parks unused objects') if parked else ''
     raise ScenarioError(f'{path}: the case holds no objects{where}')
+  if len(objects) > MAX_CASE_OBJECTS:
+    raise ScenarioError(f'{path}: {len(objects)} objects; a case holds at most '
+                        f'{MAX_CASE_OBJECTS} (line {objects[MAX_CASE_OBJECTS].line} is the first '
+                        'beyond)')
   return Case(path.stem, str(path), tuple(objects), tuple(occluders), tuple(parked))
 
 
@@ -379,9 +385,17 @@ def case_to_layout(case: Case, env) -> Layout:
 
 def overlaps(case: Case, env, tolerance: float = OVERLAP_TOLERANCE) -> list[str]:
   """One message per pair of `case`'s objects that interpenetrate by more than `tolerance` as
-  placed, before any settling, naming both lines (native MuJoCo's collision detection)."""
+  placed, before any settling, naming both lines (native MuJoCo's collision detection; objects
+  placed at one spot, which it may find no contact between, by their centres)."""
   m, index = env.scene.mj_model, env.scene.index
   layout = case_to_layout(case, env)
+  centres = [np.asarray(o.pos) for o in case.objects]
+  stacked = [f'{case.path}:{a.line} and line {b.line}: the objects are placed at one spot '
+             f'(centres {1000 * np.linalg.norm(centres[i] - centres[j]):.1f} mm apart)'
+             for i, a in enumerate(case.objects) for j, b in enumerate(case.objects)
+             if i < j and np.linalg.norm(centres[i] - centres[j]) < SAME_SPOT]
+  if stacked:
+    return stacked
   data = mujoco.MjData(m)
   for slot, (pos, quat) in enumerate(zip(np.asarray(layout.pos), np.asarray(layout.quat))):
     data.qpos[index.slot_qpos[slot]:index.slot_qpos[slot] + 7] = np.concatenate([pos, quat])

@@ -135,6 +135,16 @@ def test_objects_placed_into_each_other_are_named_by_both_lines(tmp_path):
   assert len(found) == 1 and f'{path}:1 and line 2' in found[0]
   path.write_text('cube red 0 0 0\ncube blue 0.051 0 0\ncube green 0 0 0 0.077\n')  # touching
   assert overlaps(read_case(path), env) == []
+  path.write_text('cube red 0.1 0.1 0\ncube blue 0.1 0.1 0\n')  # two alike at one spot
+  (found,) = overlaps(read_case(path), env)
+  assert f'{path}:1 and line 2: the objects are placed at one spot' in found
+
+
+def test_a_case_of_too_many_objects_is_refused_naming_the_first_line_beyond(tmp_path):
+  path = tmp_path / 'many.scn'
+  path.write_text(''.join(f'cube red {0.0003 * i - 0.18:.4f} 0 0\n' for i in range(1200)))
+  with pytest.raises(ScenarioError, match='1200 objects; a case holds at most 128 .line 129'):
+    read_case(path)
 
 
 def test_mvcoba_authors_block_table(tmp_path):

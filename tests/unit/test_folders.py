@@ -98,3 +98,23 @@ def test_a_results_file_that_cannot_be_written_leaves_the_earlier_one(tmp_path):
   assert 'results.json (File too large); the earlier one is intact' in out.stdout, out.stderr
   assert (tmp_path / 'results.json').read_text() == '{"earlier": 1}'
   assert not list(tmp_path.glob('.*.partial'))
+
+
+@pytest.mark.parametrize('blocks, says', [
+    (['vgp=mvcoba'], "'vgp' is not an evaluated suite"),
+    (['vpg=mvcoba=x'], 'expected [SUITE=]TABLE'),
+    (['mvcoba', 'mvcoba'], "names 'every suite' twice"),
+    (['nope'], 'expected [SUITE=]TABLE with TABLE one of'),
+])
+def test_block_tables_name_a_suite_evaluated_and_a_known_table(tmp_path, capsys, blocks, says):
+  assert eval_cli.main(['--baseline', 'heuristic', '--suite', 'vpg', '--config', 'tiny',
+                        '--out', str(tmp_path / 'o'), '--blocks', *blocks]) == 2
+  assert says in capsys.readouterr().err
+
+
+def test_a_long_error_is_cut_to_short_lines(capsys):
+  from mvcoba_jax.cli import fail
+  assert fail('x' * 100_000 + '\n' + 'y\n' * 50) == 2
+  err = capsys.readouterr().err
+  assert max(map(len, err.splitlines())) <= 307 and err.count('\n') == 21
+  assert err.rstrip().endswith('and 31 more lines')
