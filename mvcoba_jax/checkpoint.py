@@ -122,6 +122,23 @@ class Checkpoints:
     return jax.tree.unflatten(treedef, [restored.get(_name(path), leaf)
                                         for path, leaf in paths]), meta
 
+  def restore_params(self, params, step: int | None = None):
+    """The network parameters alone of `step` (default: the latest), shaped like `params` (the
+    `params` field of the training state): what a policy needs, read without the replay,
+    optimiser or environments (Orbax's partial restore)."""
+    step = self._step(step)
+    abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, _leaves({'params': params}))
+    restored = self._read(step, state=ocp.args.PyTreeRestore(
+        abstract, restore_args=ocp.checkpoint_utils.construct_restore_args(abstract),
+        partial_restore=True))['state']
+    paths, treedef = jax.tree_util.tree_flatten_with_path({'params': params})
+    missing = [_name(path) for path, leaf in paths if leaf.size and _name(path) not in restored]
+    if missing:
+      raise CheckpointError(f'checkpoint {self.directory / str(step)} lacks network parameters '
+                            f'({", ".join(missing[:3])})')
+    return jax.tree.unflatten(treedef, [restored.get(_name(path), leaf)
+                                        for path, leaf in paths])['params']
+
   def _read(self, step: int, **items):
     """Orbax's restore of `items`; whatever is wrong with the files becomes one CheckpointError
     naming the step folder (Orbax raises many kinds for missing, truncated or garbled files)."""

@@ -17,7 +17,6 @@ from mvcoba_jax import config as config_lib
 from mvcoba_jax import networks
 from mvcoba_jax.checkpoint import CheckpointError, Checkpoints, incompatibilities
 from mvcoba_jax.config import Config
-from mvcoba_jax.training import Trainer
 
 FORMAT = 'mvcoba-jax-export/1'
 
@@ -50,10 +49,9 @@ def load(workdir) -> tuple[Config, networks.QNetwork, int]:
   """(config, Q-network, step) of the latest checkpoint in a training work directory, or of
   a folder that `export` wrote (model.json, params.npz: see `load_exported`).
 
-  For a work directory the config (config.json) is checked against the checkpoint's before the
-  scene is built, then the whole training state is restored through `Checkpoints.restore`,
-  the path of `mvcoba-train --resume`; its structure comes from `jax.eval_shape`, which traces but
-  compiles nothing.
+  For a work directory the config (config.json) is checked against the checkpoint's, then the
+  network's parameters alone are read (`Checkpoints.restore_params`): no scene, physics, replay
+  or optimiser is built or read.
   """
   workdir = pathlib.Path(workdir)
   if (workdir / 'model.json').is_file():
@@ -83,23 +81,23 @@ def load(workdir) -> tuple[Config, networks.QNetwork, int]:
     raise PolicyError(f'{config_path} does not match checkpoint {where}:\n  '
                       + '\n  '.join(problems))
   try:
-    trainer = Trainer(config)
+    model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
   except ValueError as e:  # an unknown method or trunk
     raise PolicyError(f'{config_path}: {e}') from None
-  like = jax.eval_shape(trainer.init, jax.random.PRNGKey(config.seed))
+  graphdef, like = nnx.split(model)
   try:
-    state, _ = checkpoints.restore(like, config, step)
+    params = checkpoints.restore_params(like, step)
   except CheckpointError as e:
     raise PolicyError(str(e)) from None
   except (ValueError, KeyError) as e:  # the network code changed since
     raise PolicyError(f'checkpoint {where} does not fit the network of {config_path}: {e}'
                       ) from None
-  bad = [n for n, a in flat_params(nnx.merge(trainer.graphdef, state.params)).items()
-         if not np.isfinite(a).all()]
+  model = nnx.merge(graphdef, params)
+  bad = [n for n, a in flat_params(model).items() if not np.isfinite(a).all()]
   if bad:
     raise PolicyError(f'checkpoint {where}: parameters hold NaN or infinite values '
                       f'({", ".join(bad[:3])}{", ..." if len(bad) > 3 else ""})')
-  return config, nnx.merge(trainer.graphdef, state.params), step
+  return config, model, step
 
 
 def flat_params(model: networks.QNetwork) -> dict[str, np.ndarray]:
