@@ -396,3 +396,34 @@ def test_no_repeat_takes_the_next_best_action_instead_of_a_failed_one(setup):
   attempts = env.config.env.max_failures + 1
   assert [(g.actions, g.repeated_failures) for g in logs[False]] == [(attempts, attempts - 1)] * 2
   assert [(g.actions, g.repeated_failures) for g in logs[True]] == [(attempts, 0)] * 2
+
+
+def test_sigkill_during_an_evaluation_loses_at_most_the_row_in_progress(setup, tmp_path):
+  """An evaluation killed after its first row was written keeps that row: --resume afterwards
+  evaluates only the rest and ends with the rows of an evaluation never interrupted."""
+  import subprocess
+  import sys
+  import time
+  folder = setup[0]
+  (tmp_path / 'second').mkdir()
+  (tmp_path / 'second' / 'one.scn').write_text('cube red 0.05 0.0 0\n')
+  args = ['--baseline', 'heuristic', '--suite', str(folder), str(tmp_path / 'second'),
+          '--config', 'tiny', '--runs', '1', '--max-actions', str(MAX_ACTIONS)]
+  assert eval_cli.main([*args, '--out', str(tmp_path / 'whole')]) == 0
+  killed = tmp_path / 'killed'
+  process = subprocess.Popen([sys.executable, '-m', 'mvcoba_jax.cli.eval', *args, '--out',
+                              str(killed)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+  deadline = time.monotonic() + 600
+  while process.poll() is None and time.monotonic() < deadline:
+    if (killed / 'results.json').is_file():
+      process.kill()
+      break
+    time.sleep(0.05)
+  process.wait()
+  rows = json.loads((killed / 'results.json').read_text())
+  assert list(rows) == [str(folder)]  # the first row only: killed before the second was written
+  assert eval_cli.main([*args, '--out', str(killed), '--resume']) == 0
+  whole = json.loads((tmp_path / 'whole' / 'results.json').read_text())
+  resumed = json.loads((killed / 'results.json').read_text())
+  strip = lambda report: {s: {m: r['runs'] for m, r in rows.items()} for s, rows in report.items()}
+  assert strip(resumed) == strip(whole)
