@@ -19,31 +19,14 @@ import argparse
 import json
 import pathlib
 import sys
-import time
 
 import jax
-import jax.numpy as jnp
-import numpy as np
-from tqdm import tqdm
 
+from mvcoba_jax import api, methods
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import folders, methods, runtime, sharding
-from mvcoba_jax.checkpoint import (
-  CheckpointError,
-  Checkpoints,
-  holds_checkpoint,
-  latest_step,
-)
+from mvcoba_jax.checkpoint import holds_checkpoint, latest_step
 from mvcoba_jax.cli import fail
-from mvcoba_jax.run_log import (
-  action_records,
-  plot_curves,
-  plot_sweep,
-  read_records,
-  summary,
-  write_records,
-)
-from mvcoba_jax.training import Trainer
+from mvcoba_jax.run_log import plot_sweep
 
 
 def parse(argv):
@@ -109,9 +92,11 @@ def main(argv=None) -> int:
       if args.resume and finished(workdir, config):
         print('  finished already: its last checkpoint, config and greedy evaluation are there')
         continue
-    code = train(args, config, workdir, args.resume and (holds_checkpoint(workdir) or not sweep))
-    if code:
-      return code
+    try:
+      api.train(config, workdir, resume=args.resume and (holds_checkpoint(workdir) or not sweep),
+                overwrite=args.overwrite, eval_actions=args.eval_actions)
+    except api.TrainError as e:
+      return fail(e)
   if sweep and jax.process_index() == 0:
     window = next(iter(runs.values())).train.curve_window
     for path in plot_sweep(list(runs), window, pathlib.Path(args.workdir)):
@@ -130,109 +115,6 @@ def finished(workdir: pathlib.Path, config) -> bool:
   same = saved == json.loads(json.dumps(config_lib.to_dict(config)))  # tuples as JSON lists
   return (step is not None and step >= config.train.total_actions and same
           and (workdir / 'eval_summary.json').is_file())
-
-
-# What a run leaves in its work directory: refused to a new run without --resume or --overwrite.
-RUN_FILES = ('config.json', 'actions.jsonl', 'metrics.jsonl', 'checkpoints', 'eval_summary.json',
-             'curves.png')
-
-
-def train(args, config, workdir: pathlib.Path, resume: bool) -> int:
-  """One training run into `workdir` (resumed from its latest checkpoint with `resume`)."""
-  if resume and not holds_checkpoint(workdir):  # before anything is created or compiled
-    print(f'error: --resume: {workdir / "checkpoints"} holds no checkpoint', file=sys.stderr)
-    return 2
-  devices = sharding.mesh()
-  try:  # a config that cannot be built fails here, before the work directory exists
-    sharding.check_divisible(config.num_envs, devices)
-    trainer = Trainer(config, devices)
-  except ValueError as e:
-    return fail(e)
-  try:  # the lead process holds the folder; the others of a distributed run write beside it
-    if jax.process_index() == 0:
-      folders.claim(workdir, RUN_FILES, keep=resume, overwrite=args.overwrite)
-    else:
-      workdir.mkdir(parents=True, exist_ok=True)
-  except folders.FolderError as e:
-    return fail(e)
-  runtime.setup()
-  checkpoints = Checkpoints(workdir)  # every process takes part in saving its shards
-  lead = jax.process_index() == 0  # the one process that writes logs and curves
-  iterate = jax.jit(trainer.iterate)
-  per_iteration = config.num_envs * config.train.steps_per_iteration
-
-  print(f'{config.network.method}: {config.num_envs} tabletops x '
-        f'{config.train.steps_per_iteration} actions per compiled call on the '
-        f'{trainer.env.backend.name} backend; compiling (cached after the first time)...',
-        flush=True)
-  state = jax.jit(trainer.init)(jax.random.PRNGKey(config.seed))
-  actions_path, metrics_path = workdir / 'actions.jsonl', workdir / 'metrics.jsonl'
-  if resume:
-    try:
-      state, meta = checkpoints.restore(state, config)
-    except CheckpointError as e:
-      return fail(e)
-    records = read_records(actions_path, int(state.actions))
-    if lead:
-      write_records(actions_path, records, 'w')
-    print(f'resumed from {checkpoints.directory} at action {int(state.actions)}')
-  else:
-    records = []
-    if lead:
-      write_records(actions_path, [], 'w')
-      metrics_path.write_text('')
-  if lead:
-    (workdir / 'config.json').write_text(json.dumps(config_lib.to_dict(config), indent=1))
-  if devices.devices.size > 1:  # data parallel: environments and replay split over the devices
-    state = sharding.place(state, devices)
-
-  total = config.train.total_actions
-  start = time.perf_counter()
-  done_before = int(state.actions)
-  iteration = done_before // per_iteration
-  bar = tqdm(total=total, initial=done_before, unit='action', desc='training', disable=not lead)
-  while int(state.actions) < total:
-    t0 = time.perf_counter()
-    state, log = iterate(state, jnp.bool_(True), jnp.float32(-1.0))
-    new = action_records(log, int(state.actions) - per_iteration, len(trainer.views))
-    records += new
-    iteration += 1
-    so_far = summary(records)
-    rate = (int(state.actions) - done_before) / (time.perf_counter() - start)
-    line = {'iteration': iteration, 'actions': int(state.actions),
-            'wall_s': time.perf_counter() - t0, 'actions_per_s': rate, 'loss': float(np.mean(np.asarray(log.loss))),
-            'epsilon': float(np.asarray(log.epsilon)[-1]), 'episodes': int(state.episodes),
-            'updates': int(state.updates), 'skipped_updates': int(state.skipped_updates),
-            'health_resets': int(state.env.health_resets.sum()),
-            'grasp_success': so_far['grasp_success']}
-    if lead:
-      write_records(actions_path, new, 'a')
-      write_records(metrics_path, [line], 'a')
-    bar.update(per_iteration)
-    bar.set_postfix(actions_per_s=f'{rate:.2f}', grasp=f'{so_far["grasp_success"]:.2f}',
-                    eps=f'{line["epsilon"]:.2f}', loss=f'{line["loss"]:.3f}')
-    if iteration % config.train.checkpoint_every == 0 or int(state.actions) >= total:
-      checkpoints.save(int(state.actions), state,
-                       {'config': config_lib.to_dict(config), 'iteration': iteration})
-      if lead:
-        plot_curves(workdir, records, config)
-  bar.close()
-  curve = plot_curves(workdir, records, config) if lead else None
-  train_summary = summary(records)
-  print(f'training: {json.dumps(train_summary)}; wall {time.perf_counter() - start:.0f} s; '
-        f'curves {curve}')
-
-  # A short greedy evaluation from the trained state: no learning, epsilon 0.
-  evaluation, eval_records = state, []
-  for _ in range(max(1, -(-args.eval_actions // per_iteration))):
-    first = int(evaluation.actions)
-    evaluation, log = iterate(evaluation, jnp.bool_(False), jnp.float32(0.0))
-    eval_records += action_records(log, first, len(trainer.views))
-  result = summary(eval_records)
-  if lead:
-    (workdir / 'eval_summary.json').write_text(json.dumps(result, indent=1))
-  print(f'greedy evaluation on random drops: {json.dumps(result)}')
-  return 0
 
 
 if __name__ == '__main__':

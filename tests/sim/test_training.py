@@ -344,3 +344,21 @@ def test_authors_recipe_on_real_transitions():
                           jnp.ones(t.batch_size + b, bool))
   _, mean_loss = jax.jit(trainer.update)(state, key, True, (batch, jnp.bool_(True)))
   np.testing.assert_allclose(float(mean_loss), float(whole) / (t.batch_size + b), rtol=1e-4)
+
+
+def test_train_and_load_policy_as_library_calls(tmp_path):
+  """`mvcoba_jax.train` is what mvcoba-train does, as a function; `mvcoba_jax.load_policy`
+  reads back the network it trained, parameter for parameter."""
+  import mvcoba_jax
+  from flax import nnx
+  config = resolve(TINY, ['train.total_actions=4'])
+  result = mvcoba_jax.train(config, tmp_path / 'run', eval_actions=1, progress=False)
+  assert int(result.state.actions) == 4 and result.summary['grasp_attempts'] >= 0
+  assert {'config.json', 'actions.jsonl', 'metrics.jsonl', 'checkpoints', 'eval_summary.json',
+          'curves.png'} <= {p.name for p in (tmp_path / 'run').iterdir()}
+  loaded, network, step = mvcoba_jax.load_policy(tmp_path / 'run')
+  assert step == 4 and loaded == config
+  for a, b in zip(jax.tree.leaves(nnx.state(network)), jax.tree.leaves(result.state.params)):
+    np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+  with pytest.raises(mvcoba_jax.TrainError, match='holds results of an earlier run'):
+    mvcoba_jax.train(config, tmp_path / 'run', progress=False)
