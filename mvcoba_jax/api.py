@@ -1,9 +1,10 @@
-"""The library calls under the commands: what `mvcoba-train` does, as a function of a config
-and a work directory, and the policy loader `mvcoba-eval` and `mvcoba-export` use.
+"""The library calls under the commands: `train` (mvcoba-train's run into a work directory),
+`evaluate` and `join_evaluations` (mvcoba-eval), and the policy loader.
 
     import mvcoba_jax
     from mvcoba_jax.config import resolve
     result = mvcoba_jax.train(resolve('tiny'), 'runs/tiny')
+    report = mvcoba_jax.evaluate(['runs/tiny'], ['occluded'], runs=2, out='runs/tiny-eval')
     config, network, step = mvcoba_jax.load_policy('runs/tiny')
 """
 from __future__ import annotations
@@ -20,14 +21,21 @@ import numpy as np
 from tqdm import tqdm
 
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import folders, runtime, sharding
+from mvcoba_jax import evaluation, folders, paper, runtime, sharding, video, viz
+from mvcoba_jax import report as report_lib
 from mvcoba_jax.checkpoint import CheckpointError, Checkpoints, holds_checkpoint
 from mvcoba_jax.config import Config
+from mvcoba_jax.policy import PolicyError, fingerprint
 from mvcoba_jax.policy import load as load_policy
 from mvcoba_jax.run_log import action_records, plot_curves, read_records, summary, write_records
+from mvcoba_jax.sim.scenarios import ScenarioError, case_to_layout, read_case, stack_layouts
+from mvcoba_jax.sim.shapes import BLOCK_TABLES
+from mvcoba_jax.sim.tabletop import Tabletop
+from mvcoba_jax.suites import suite_files
 from mvcoba_jax.training import Trainer
 
-__all__ = ['RUN_FILES', 'TrainError', 'TrainResult', 'load_policy', 'train']
+__all__ = ['EvaluationError', 'RESULT_FILES', 'RUN_FILES', 'TrainError', 'TrainResult',
+           'evaluate', 'join_evaluations', 'load_policy', 'train']
 
 # What a run leaves in its work directory: refused to a new run without `resume` or `overwrite`.
 RUN_FILES = ('config.json', 'actions.jsonl', 'metrics.jsonl', 'checkpoints', 'eval_summary.json',
@@ -158,3 +166,201 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
   say(f'greedy evaluation on random drops: {json.dumps(greedy)}')
   return TrainResult(state=state, summary=train_summary, greedy=greedy, workdir=workdir,
                      curves=curve)
+
+
+# What an evaluation writes to its output folder: refused to a new one without `resume` or
+# `overwrite`.
+RESULT_FILES = ('results.json', 'results.md', 'comparison.md', 'visuals', 'videos')
+MAX_ACTIONS_LIMIT = 10_000  # per run: counters and traces grow with it
+MAX_BATCH_RUNS = 4096  # cases x runs of a suite step in one batch, each a whole tabletop
+PROTOCOLS = ('frozen', 'online', 'no-repeat')
+
+
+class EvaluationError(ValueError):
+  """An evaluation that cannot run as asked: its policies, cases, settings or output folder;
+  the message names which."""
+
+
+def check_work(runs: int, max_actions: int, suites: dict[str, list]) -> None:
+  """Refuses runs per case and action caps whose work no evaluation could finish or hold,
+  naming the limit."""
+  if not 1 <= max_actions <= MAX_ACTIONS_LIMIT:
+    raise EvaluationError(f'--max-actions {max_actions}: allowed range [1, {MAX_ACTIONS_LIMIT}]')
+  for name, files in suites.items():
+    if runs < 1 or runs * len(files) > MAX_BATCH_RUNS:
+      raise EvaluationError(f'--runs {runs} x {len(files)} cases of suite {name}: between 1 '
+                            f'and {MAX_BATCH_RUNS} runs of a suite step in one batch')
+
+
+def block_tables(given, suites: list[str]) -> dict[str, str]:
+  """`[SUITE=]TABLE` items as suite ('' for every suite) -> block table, each suite named once
+  and among the evaluated ones, each table a known one."""
+  tables = {}
+  for item in given:
+    suite, _, table = item.rpartition('=')
+    if table not in BLOCK_TABLES or '=' in suite:
+      raise EvaluationError(f'--blocks {item[:80]!r}: expected [SUITE=]TABLE with TABLE one of '
+                            f'{", ".join(BLOCK_TABLES)}')
+    if suite and suite not in suites:
+      raise EvaluationError(f'--blocks {item[:80]!r}: {suite[:60]!r} is not an evaluated suite '
+                            f'({", ".join(suites)[:120]})')
+    if suite in tables:
+      raise EvaluationError(f'--blocks names {suite[:60] or "every suite"!r} twice')
+    tables[suite] = table
+  return tables
+
+
+def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, runs: int = 5,
+             max_actions: int = 60, seed: int = 0, protocol: str = 'frozen',
+             config: str | None = None, overrides=(), blocks=(), allow_bad_cases: bool = False,
+             out='eval_out', resume: bool = False, overwrite: bool = False,
+             save_visuals: bool = False, video: bool = False, progress: bool = True) -> dict:
+  """Evaluates trained policies (work directories or exports) and a `baseline` on suites (names
+  of `suites.SUITES`, `all`, or paths of case files and folders): every case x `runs` runs of a
+  suite in one compiled lockstep loop, each run capped at `max_actions`. `protocol` 'frozen'
+  acts greedily with the trained network, 'online' lets every run go on learning from its own
+  actions, 'no-repeat' is frozen but never repeats a failed action of its run.
+
+  Returns the report written to `out` (results.json, results.md, rewritten after each row):
+  suite -> row label -> per-case metrics, their means, each run's counts and the settings the
+  row was evaluated with. `resume` keeps `out`'s rows of the same settings and evaluates the
+  rest; an `out` holding results is refused unless `resume` or `overwrite`. A policy evaluates
+  in its own config with `overrides` applied (`config.evaluated`); the baseline in `config`.
+  Raises EvaluationError before anything compiles when an input cannot serve.
+  """
+  if protocol not in PROTOCOLS:
+    raise EvaluationError(f'protocol {protocol!r}: one of {", ".join(PROTOCOLS)}')
+  if protocol != 'frozen' and baseline:
+    raise EvaluationError(f'the {protocol} protocol changes how a trained network acts; a '
+                          'baseline has none')
+  if resume and overwrite:
+    raise EvaluationError('resume keeps the rows of the output folder and overwrite replaces '
+                          'them: give one')
+  say = print if progress else (lambda *a, **k: None)
+  checkpoints = [str(c) for c in checkpoints]
+  try:  # everything that can be wrong with the input fails here, before any compile
+    folders.check(out, RESULT_FILES, keep=resume, overwrite=overwrite)
+    files_of = suite_files(list(suites))
+    check_work(runs, max_actions, files_of)
+    base = config_lib.resolve(config, overrides)
+    bounds = base.scene.workspace_half, base.scene.workspace_top
+    tables = block_tables(blocks, list(files_of))
+    cases_of = {name: [read_case(f, *bounds, blocks=tables.get(name, tables.get('', 'vpg')))
+                       for f in files]
+                for name, files in files_of.items()}
+    bad = [m for cases in cases_of.values() for m in evaluation.case_problems(cases, base)]
+    loaded = [load_policy(path) for path in checkpoints]
+    trained = [(config_lib.trained_as(c), c.seed) for c, _, _ in loaded] + [(None, None)]
+    sources = [(config_lib.evaluated(c, overrides), model, step) for c, model, step in loaded]
+    sources += [baseline] if baseline else []
+    names = [evaluation.source_name(s) for s in sources]
+    labels = (report_lib.row_labels(checkpoints, names[:len(checkpoints)])
+              + names[len(checkpoints):])
+    if protocol != 'frozen':
+      labels = [f'{label} [{protocol}]' for label in labels]
+    settings = {(suite, label): {
+        'checkpoint': path, 'step': None if isinstance(source, str) else source[2],
+        'params': None if isinstance(source, str) else fingerprint(source[1]),
+        'cases': [c.name for c in cases], 'runs': runs, 'max_actions': max_actions,
+        'seed': seed, 'set': list(overrides), 'training': training[0],
+        'training_seed': training[1], 'protocol': protocol}
+        for suite, cases in cases_of.items()
+        for label, source, path, training in zip(labels, sources, checkpoints + [None],
+                                                 trained)}
+    report = report_lib.kept_rows(pathlib.Path(out), settings) if resume else {}
+  except (config_lib.ConfigError, ScenarioError, PolicyError, report_lib.ResultsError,
+          folders.FolderError) as e:
+    raise EvaluationError(str(e)) from None
+  if bad and not allow_bad_cases:
+    raise EvaluationError('\n  '.join(bad) + '\n(--allow-bad-cases evaluates them anyway)')
+  for suite, cases in cases_of.items():
+    parked = sum(len(c.parked_lines) for c in cases)
+    if parked:
+      say(f'{suite}: {parked} lines of its VPG files lie outside VPG\'s workspace (objects VPG '
+          'parked) and are not in play')
+  try:
+    out = folders.claim(out, RESULT_FILES, keep=resume, overwrite=overwrite)
+  except folders.FolderError as e:
+    raise EvaluationError(str(e)) from None
+  pictures = [name for name, wanted in (('visuals', save_visuals), ('videos', video))
+              if wanted and (out / name).exists() and not (out / name).is_dir()]
+  if pictures:
+    raise EvaluationError(f'{out}: {", ".join(pictures)} is a file, where the runs\' pictures go')
+  runtime.setup()
+  try:
+    for suite, cases in cases_of.items():
+      rows = report.setdefault(suite, {})
+      for label, source in zip(labels, sources):
+        if label in rows:
+          say(f'{suite}: {label}: kept from {out / "results.json"}', flush=True)
+          continue
+        rows[label] = _row(suite, cases, label, source, base, protocol, runs, max_actions, seed,
+                           out, save_visuals, video, progress) | {
+                               'settings': settings[suite, label]}
+        report_lib.write_report(report_lib.in_order(report, settings), out)
+        say(f'  done in {rows[label]["wall_s"]:.0f} s', flush=True)
+      for text in report_lib.suite_tables(suite, report_lib.in_order(report, settings)[suite]):
+        say('\n' + text)
+    report = report_lib.in_order(report, settings)
+    report_lib.write_report(report, out)
+  except report_lib.ResultsError as e:
+    raise EvaluationError(str(e)) from None
+  say(f'\nwrote {out / "results.json"} and {out / "results.md"}')
+  return report
+
+
+def _row(suite, cases, label, source, base, protocol, runs, max_actions, seed, out,
+         save_visuals, video_too, progress) -> dict:
+  """One policy's row of one suite: its runs, their pictures when asked, the scored counts."""
+  say = print if progress else (lambda *a, **k: None)
+  config = base if isinstance(source, str) else source[0]
+  env = Tabletop(evaluation.suite_config(config, evaluation.pool_for(cases)),
+                 frames=video.FRAMES_PER_PRIMITIVE if video_too else 0)
+  policy, views = evaluation.make_policy(source, env.config, protocol == 'online',
+                                         protocol == 'no-repeat')
+  layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
+  keys = jax.random.split(jax.random.PRNGKey(seed), len(cases) * runs)
+  say(f'{suite}: {label}, {len(cases)} cases x {runs} runs, up to {max_actions} actions each; '
+      'compiling and running...', flush=True)
+  start = time.perf_counter()
+  with tqdm(total=max_actions, unit='action', desc=f'  {suite}', disable=not progress) as bar:
+    def progress(done, finished, bar=bar, n=len(layouts.in_play)):
+      bar.set_postfix_str(f'{int(finished)}/{n} runs finished', refresh=False)
+      bar.update(int(done) - bar.n)
+    result = evaluation.evaluate(env, policy, views, layouts, keys, max_actions,
+                                 record=save_visuals or video_too, progress=progress)
+    logs = evaluation.run_logs(result)
+  names = [c.name for c in cases]
+  run_names = [f'{n}_run{r}' for n in names for r in range(runs)]
+  where = pathlib.Path(pathlib.Path(suite).name) / label.replace(':', '_')
+  if video_too:
+    paths = video.write_run_videos(jax.device_get(result.trace), run_names,
+                                   out / 'videos' / where, env)
+    say(f'  {len(paths)} videos in {out / "videos" / where}', flush=True)
+  if save_visuals:
+    folder = out / 'visuals' / where
+    viz.write_run_strips(jax.device_get(result.trace), run_names, folder, env.config)
+    lost = evaluation.losses(result.trace, run_names, env.config)
+    (folder / 'losses.json').write_text(json.dumps(lost, indent=1))
+    say(f'  visuals in {folder}; {report_lib.loss_summary(lost)}', flush=True)
+  by_case = {name: logs[i * runs:(i + 1) * runs] for i, name in enumerate(names)}
+  uneven = report_lib.uneven_starts(by_case)
+  if uneven:
+    say(f'  objects left while these cases settled, so their runs start with different numbers '
+        f'in play: {uneven}', flush=True)
+  return report_lib.scored(by_case, time.perf_counter() - start)
+
+
+def join_evaluations(evaluations, out, *, overwrite: bool = False) -> dict:
+  """The results.json of evaluations run apart (their output folders) as one report, scored
+  again from their runs, written to `out` with comparison.md (ours beside the paper's); a
+  folder given twice, or an `out` holding results without `overwrite`, is refused."""
+  try:
+    folders.check(out, RESULT_FILES, overwrite=overwrite)
+    report = report_lib.joined_report([str(e) for e in evaluations])
+    out = folders.claim(out, RESULT_FILES, overwrite=overwrite)
+    report_lib.write_report(report, out)
+    report_lib.write_whole(out / 'comparison.md', paper.comparisons(report) + '\n')
+  except (report_lib.ResultsError, folders.FolderError) as e:
+    raise EvaluationError(str(e)) from None
+  return report

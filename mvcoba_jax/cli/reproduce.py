@@ -25,7 +25,7 @@ import sys
 import time
 
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import folders, methods, paper
+from mvcoba_jax import api, folders, methods, paper
 from mvcoba_jax.checkpoint import holds_checkpoint
 from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.cli import fail
@@ -79,12 +79,12 @@ def main(argv=None) -> int:
   if args.actions < 1:
     parser.error('--actions must be at least 1')
   try:  # what the evaluation would refuse, refused before the sweep trains
-    eval_cli.check_work(args.runs, args.max_actions, suite_files(args.suites))
+    api.check_work(args.runs, args.max_actions, suite_files(args.suites))
     for protocol in args.protocols:
       folders.claim(protocol_folder(pathlib.Path(args.out), protocol), keep=True)
     if pathlib.Path(args.workdir).exists() and not pathlib.Path(args.workdir).is_dir():
       raise folders.FolderError(f'--workdir {args.workdir} is a file, not a folder')
-  except (folders.FolderError, eval_cli.UsageError) as e:
+  except (folders.FolderError, api.EvaluationError) as e:
     return fail(e)
   trainings = len(args.methods) * len(args.seeds)
   cases = sum(len(files) for files in suite_files(args.suites).values())

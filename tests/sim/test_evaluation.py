@@ -135,7 +135,7 @@ def test_overlapping_case_is_refused_before_compiling_naming_both_lines(tmp_path
   assert err.startswith('error: ') and f'{grid}:1 and line 2' in err and '--allow-bad-cases' in err
   assert not (tmp_path / 'out').exists()
   assert eval_cli.main(args + ['--blocks', 'lego']) == 2
-  assert "unknown block table 'lego'" in capsys.readouterr().err
+  assert "--blocks 'lego': expected [SUITE=]TABLE with TABLE one of vpg, mvcoba" in capsys.readouterr().err
 
 
 def test_case_that_loses_an_object_while_settling_is_refused_naming_the_line(tmp_path, capsys):
@@ -427,3 +427,23 @@ def test_sigkill_during_an_evaluation_loses_at_most_the_row_in_progress(setup, t
   resumed = json.loads((killed / 'results.json').read_text())
   strip = lambda report: {s: {m: r['runs'] for m, r in rows.items()} for s, rows in report.items()}
   assert strip(resumed) == strip(whole)
+
+
+def test_evaluate_and_join_as_library_calls(setup, tmp_path):
+  """`mvcoba_jax.evaluate` is mvcoba-eval as a function: it returns the report it writes;
+  `join_evaluations` scores it again from its runs; bad input raises EvaluationError."""
+  import mvcoba_jax
+  from mvcoba_jax import api
+  folder = setup[0]
+  report = mvcoba_jax.evaluate(suites=[str(folder)], baseline='heuristic', config='tiny',
+                               runs=1, max_actions=MAX_ACTIONS, out=tmp_path / 'o',
+                               progress=False)
+  row = report[str(folder)]['baseline:heuristic']
+  assert set(row['cases']) == {'pair', 'three'} and row['settings']['protocol'] == 'frozen'
+  assert json.loads((tmp_path / 'o' / 'results.json').read_text())[str(folder)][
+      'baseline:heuristic']['runs'] == row['runs']
+  joined = api.join_evaluations([tmp_path / 'o'], tmp_path / 'j')
+  assert joined[str(folder)]['baseline:heuristic']['cases']['pair']['grasp_success'] == \
+      row['cases']['pair']['grasp_success']
+  with pytest.raises(api.EvaluationError, match='a baseline has none'):
+    mvcoba_jax.evaluate(suites=[str(folder)], baseline='heuristic', protocol='online')
