@@ -253,52 +253,71 @@ def advance(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch,
             record: bool, progress, until, retired) -> Batch:
   """Lockstep actions until every run of the batch has finished, the action cap, or no more than
   `until` runs still going; `retired`: the finished runs outside this batch (for `progress`)."""
-  online = isinstance(policy, OnlinePolicy)
-
-  def body(batch: Batch) -> Batch:
-    states, obs, runs = batch.states, batch.obs, batch.runs
-    keys, k_act = jax.vmap(jax.random.split, out_axes=1)(batch.keys)
-    active = ~runs.finished
-    learner = batch.learner
-    if online:
-      action, q = policy.act(learner, obs, batch.changed)
-      learner = policy.learn(learner, q, batch.changed, active)
-    else:
-      action = policy(obs, batch.changed, k_act, (runs.failed, runs.tried))
-    next_states, next_obs, out = task.step(env, views, states, obs, runs.failures, action,
-                                            env.config.train)
-    if online:
-      learner = policy.remember(learner, obs, action, out, active)
-    info = out.info
-    count = lambda total, x: total + jnp.where(active, x, 0).astype(jnp.int32)
-    is_grasp = action.primitive == agent.GRASP
-    picked = count(runs.picked, info.picked)
-    failed, tried, repeated = _repeats(runs, action, out, active)
-    runs = runs.replace(
-        actions=count(runs.actions, 1), grasp_attempts=count(runs.grasp_attempts, is_grasp),
-        grasp_successes=count(runs.grasp_successes, info.grasp_success), picked=picked,
-        lost=count(runs.lost, info.lost), failures=jnp.where(active, out.failures, runs.failures),
-        finished=runs.finished | out.done,
-        completed=runs.completed | (active & out.cleared & (picked == runs.objects)),
-        failed=failed, tried=tried, repeated_failures=count(runs.repeated_failures, repeated))
-    if record:
-      runs = runs.replace(trace=jax.tree.map(
-          lambda buf, x: buf.at[:, batch.t].set(x), runs.trace,
-          _snapshot(env, obs, states, action, info, active)))
-    if progress is not None:
-      jax.debug.callback(progress, batch.t + 1, retired + jnp.sum(runs.finished))
-    # A finished run steps on with its table emptied, so the batch waits for the others at
-    # a fraction of the cost; nothing it does is counted.
-    next_states = where_envs(runs.finished, jax.vmap(env.emptied)(next_states), next_states)
-    return Batch(states=next_states, obs=where_envs(active, next_obs, obs),
-                 changed=jnp.where(active, out.changed, batch.changed), runs=runs, keys=keys,
-                 t=batch.t + 1, learner=learner)
-
   def going(batch: Batch):
     still = jnp.sum(~batch.runs.finished)
     return (still > 0) & (still > until) & (batch.t < max_actions)
 
-  return jax.lax.while_loop(going, body, batch)
+  return jax.lax.while_loop(
+      going, lambda b: lockstep(env, policy, views, b, record, progress, retired), batch)
+
+
+def advance_on_host(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch,
+                    max_actions: int, record: bool, progress, until, retired) -> Batch:
+  """`advance` with its loop on the host, one compiled lockstep action per call: what an online
+  policy runs on a CPU, where XLA runs an SGD update inside a loop body several times slower than
+  outside one (docs/design.md; training writes its steps out for the same reason)."""
+  while True:
+    still = int(jnp.sum(~batch.runs.finished))
+    if not (still > 0 and still > until and int(batch.t) < max_actions):
+      return batch
+    batch = _lockstep(env, policy, views, batch, record, progress, retired)
+
+
+def lockstep(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch, record: bool,
+             progress, retired) -> Batch:
+  """One lockstep action of every run of the batch; `retired`: the finished runs outside this
+  batch (for `progress`)."""
+  online = isinstance(policy, OnlinePolicy)
+  states, obs, runs = batch.states, batch.obs, batch.runs
+  keys, k_act = jax.vmap(jax.random.split, out_axes=1)(batch.keys)
+  active = ~runs.finished
+  learner = batch.learner
+  if online:
+    action, q = policy.act(learner, obs, batch.changed)
+    learner = policy.learn(learner, q, batch.changed, active)
+  else:
+    action = policy(obs, batch.changed, k_act, (runs.failed, runs.tried))
+  next_states, next_obs, out = task.step(env, views, states, obs, runs.failures, action,
+                                          env.config.train)
+  if online:
+    learner = policy.remember(learner, obs, action, out, active)
+  info = out.info
+  count = lambda total, x: total + jnp.where(active, x, 0).astype(jnp.int32)
+  is_grasp = action.primitive == agent.GRASP
+  picked = count(runs.picked, info.picked)
+  failed, tried, repeated = _repeats(runs, action, out, active)
+  runs = runs.replace(
+      actions=count(runs.actions, 1), grasp_attempts=count(runs.grasp_attempts, is_grasp),
+      grasp_successes=count(runs.grasp_successes, info.grasp_success), picked=picked,
+      lost=count(runs.lost, info.lost), failures=jnp.where(active, out.failures, runs.failures),
+      finished=runs.finished | out.done,
+      completed=runs.completed | (active & out.cleared & (picked == runs.objects)),
+      failed=failed, tried=tried, repeated_failures=count(runs.repeated_failures, repeated))
+  if record:
+    runs = runs.replace(trace=jax.tree.map(
+        lambda buf, x: buf.at[:, batch.t].set(x), runs.trace,
+        _snapshot(env, obs, states, action, info, active)))
+  if progress is not None:
+    jax.debug.callback(progress, batch.t + 1, retired + jnp.sum(runs.finished))
+  # A finished run steps on with its table emptied, so the batch waits for the others at
+  # a fraction of the cost; nothing it does is counted.
+  next_states = where_envs(runs.finished, jax.vmap(env.emptied)(next_states), next_states)
+  return Batch(states=next_states, obs=where_envs(active, next_obs, obs),
+               changed=jnp.where(active, out.changed, batch.changed), runs=runs, keys=keys,
+               t=batch.t + 1, learner=learner)
+
+
+_lockstep = jax.jit(lockstep, static_argnames=('env', 'policy', 'views', 'record', 'progress'))
 
 
 def _repeats(runs: Runs, action: agent.PixelAction, out: task.Outcome, active):
@@ -342,7 +361,9 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
   size, members, runs = n, jnp.arange(n), batch.runs.replace(learner=batch.learner)
   while True:
     until = size // 2 if size // 2 >= smallest else -1
-    batch = advance(env, policy, views, batch, max_actions, record, progress, until, n - size)
+    loop = (advance_on_host if isinstance(policy, OnlinePolicy)
+            and jax.default_backend() == 'cpu' else advance)
+    batch = loop(env, policy, views, batch, max_actions, record, progress, until, n - size)
     runs = jax.tree.map(lambda whole, part: whole.at[members].set(part), runs,
                         batch.runs.replace(learner=batch.learner))
     going = int(jnp.sum(~batch.runs.finished))
