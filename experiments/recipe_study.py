@@ -48,11 +48,11 @@ def commit() -> str:
 def run(command: list[str], log: pathlib.Path, what: str) -> bool:
   """Runs a command with its output in `log`'s folder; records it in `log`; True on success."""
   out = log.parent / f'{what}.log'
-  start = time.time()
+  start, at = time.time(), commit()
   with open(out, 'w') as f:
     code = subprocess.call(command, stdout=f, stderr=subprocess.STDOUT, cwd=ROOT)
   with open(log, 'a') as f:
-    f.write(json.dumps({'what': what, 'command': command, 'commit': commit(), 'rc': code,
+    f.write(json.dumps({'what': what, 'command': command, 'commit': at, 'rc': code,
                         'wall_s': round(time.time() - start, 1), 'ended': time.ctime()}) + '\n')
   print(f'{what}: rc {code} in {time.time() - start:.0f} s ({out})', flush=True)
   return code == 0
