@@ -18,6 +18,7 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 import numpy as np
+from tensorboardX import SummaryWriter
 from tqdm import tqdm
 
 from mvcoba_jax import config as config_lib
@@ -39,7 +40,10 @@ __all__ = ['EvaluationError', 'RESULT_FILES', 'RUN_FILES', 'TrainError', 'TrainR
 
 # What a run leaves in its work directory: refused to a new run without `resume` or `overwrite`.
 RUN_FILES = ('config.json', 'actions.jsonl', 'metrics.jsonl', 'checkpoints', 'eval_summary.json',
-             'curves.png')
+             'curves.png', 'tensorboard')
+# The scalars of metrics.jsonl also written as TensorBoard events (`tensorboard --logdir WORKDIR`).
+SCALARS = ('loss', 'epsilon', 'grasp_success', 'actions_per_s', 'episodes', 'updates',
+           'skipped_updates', 'health_resets')
 
 
 class TrainError(ValueError):
@@ -61,8 +65,8 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
   """Trains `config` into `workdir` to `config.train.total_actions`, then a short greedy check.
 
   The work directory gets config.json, actions.jsonl (a line per action), metrics.jsonl (a line
-  per compiled call), atomic checkpoints every `train.checkpoint_every` calls and at the end,
-  curves.png and eval_summary.json. `resume` continues from its latest checkpoint; a directory
+  per compiled call; its scalars also as TensorBoard events in tensorboard/), atomic checkpoints
+  every `train.checkpoint_every` calls and at the end, curves.png and eval_summary.json. `resume` continues from its latest checkpoint; a directory
   holding an earlier run is refused unless `resume` or `overwrite` (which deletes it first).
   Raises TrainError before anything compiles when the config, directory or checkpoint cannot
   serve. On several devices the tabletops and replay are sharded (`sharding.py`); process 0
@@ -113,6 +117,7 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
       metrics_path.write_text('')
   if lead:
     (workdir / 'config.json').write_text(json.dumps(config_lib.to_dict(config), indent=1))
+    events = SummaryWriter(str(workdir / 'tensorboard'))
   if devices.devices.size > 1:  # data parallel: environments and replay split over the devices
     state = sharding.place(state, devices)
 
@@ -140,6 +145,8 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
     if lead:
       write_records(actions_path, new, 'a')
       write_records(metrics_path, [line], 'a')
+      for name in SCALARS:
+        events.add_scalar(f'train/{name}', line[name], line['actions'])
     bar.update(per_iteration)
     bar.set_postfix(actions_per_s=f'{rate:.2f}', grasp=f'{so_far["grasp_success"]:.2f}',
                     eps=f'{line["epsilon"]:.2f}', loss=f'{line["loss"]:.3f}')
@@ -163,6 +170,9 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
   greedy = summary(eval_records)
   if lead:
     (workdir / 'eval_summary.json').write_text(json.dumps(greedy, indent=1))
+    for name in ('grasp_success', 'action_efficiency'):
+      events.add_scalar(f'greedy/{name}', greedy[name], int(state.actions))
+    events.close()
   say(f'greedy evaluation on random drops: {json.dumps(greedy)}')
   return TrainResult(state=state, summary=train_summary, greedy=greedy, workdir=workdir,
                      curves=curve)

@@ -355,10 +355,33 @@ def test_train_and_load_policy_as_library_calls(tmp_path):
   result = mvcoba_jax.train(config, tmp_path / 'run', eval_actions=1, progress=False)
   assert int(result.state.actions) == 4 and result.summary['grasp_attempts'] >= 0
   assert {'config.json', 'actions.jsonl', 'metrics.jsonl', 'checkpoints', 'eval_summary.json',
-          'curves.png'} <= {p.name for p in (tmp_path / 'run').iterdir()}
+          'curves.png', 'tensorboard'} <= {p.name for p in (tmp_path / 'run').iterdir()}
+  # TensorBoard's events hold metrics.jsonl's numbers, at the same action counts.
+  events = _scalars(next((tmp_path / 'run' / 'tensorboard').glob('events.out.tfevents.*')))
+  lines = [json.loads(line) for line in (tmp_path / 'run' / 'metrics.jsonl').read_text().splitlines()]
+  assert [step for step, _ in events['train/loss']] == [m['actions'] for m in lines]
+  assert [v for _, v in events['train/loss']] == pytest.approx([m['loss'] for m in lines])
+  (step, value), = events['greedy/grasp_success']
+  assert step == 4 and value == pytest.approx(result.greedy['grasp_success'])
   loaded, network, step = mvcoba_jax.load_policy(tmp_path / 'run')
   assert step == 4 and loaded == config
   for a, b in zip(jax.tree.leaves(nnx.state(network)), jax.tree.leaves(result.state.params)):
     np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
   with pytest.raises(mvcoba_jax.TrainError, match='holds results of an earlier run'):
     mvcoba_jax.train(config, tmp_path / 'run', progress=False)
+
+
+def _scalars(path) -> dict[str, list[tuple[int, float]]]:
+  """tag -> [(step, value)] of a TensorBoard event file (TFRecord framing: length, its CRC, the
+  Event proto, its CRC)."""
+  import struct
+
+  from tensorboardX.proto import event_pb2
+  data, out, at = path.read_bytes(), {}, 0
+  while at < len(data):
+    (length,) = struct.unpack('<Q', data[at:at + 8])
+    event = event_pb2.Event.FromString(data[at + 12:at + 12 + length])
+    at += 12 + length + 4
+    for value in event.summary.value:
+      out.setdefault(value.tag, []).append((event.step, value.simple_value))
+  return out
