@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Copies a study's finished evaluations and its log into docs/results/recipe/screen (the layout
+# recipe_table.py reads: eval/NAME/results.json, study.jsonl) and writes its table beside them.
+#   bash experiments/land.sh /work/study-recipe
+set -euo pipefail
+cd "$(dirname "$0")/.."
+study=$1 screen=docs/results/recipe/screen
+mkdir -p "$screen/eval"
+for d in "$study"/eval/*/; do
+  [ -f "$d/done" ] || continue
+  mkdir -p "$screen/eval/$(basename "$d")"
+  cp "$d/results.json" "$d/results.md" "$d/done" "$screen/eval/$(basename "$d")/"
+done
+cp "$study/study.jsonl" "$screen/"
+python experiments/recipe_table.py --workdir "$screen" > "$screen/table.md"
