@@ -24,7 +24,7 @@ from tqdm import tqdm
 from mvcoba_jax import config as config_lib
 from mvcoba_jax import evaluation, folders, paper, runtime, sharding, video, viz
 from mvcoba_jax import report as report_lib
-from mvcoba_jax.checkpoint import CheckpointError, Checkpoints, holds_checkpoint
+from mvcoba_jax.checkpoint import CheckpointError, Checkpoints, holds_checkpoint, latest_step
 from mvcoba_jax.config import Config
 from mvcoba_jax.policy import PolicyError, fingerprint
 from mvcoba_jax.policy import load as load_policy
@@ -89,6 +89,15 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
       workdir.mkdir(parents=True, exist_ok=True)
   except folders.FolderError as e:
     raise TrainError(str(e)) from None
+  try:
+    return _train(config, trainer, devices, workdir, resume, eval_actions, progress, lead)
+  finally:
+    folders.release(workdir)
+
+
+def _train(config: Config, trainer: Trainer, devices, workdir: pathlib.Path, resume: bool,
+           eval_actions: int, progress: bool, lead: bool) -> TrainResult:
+  """`train` once its work directory is held."""
   runtime.setup()
   checkpoints = Checkpoints(workdir)  # every process takes part in saving its shards
   iterate = jax.jit(trainer.iterate)
@@ -106,7 +115,10 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
       state, _ = checkpoints.restore(state, config)
     except CheckpointError as e:
       raise TrainError(str(e)) from None
-    records = read_records(actions_path, int(state.actions))
+    try:
+      records = read_records(actions_path, int(state.actions))
+    except ValueError as e:
+      raise TrainError(str(e)) from None
     if lead:
       write_records(actions_path, records, 'w')
     say(f'resumed from {checkpoints.directory} at action {int(state.actions)}')
@@ -125,37 +137,36 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
   start = time.perf_counter()
   done_before = int(state.actions)
   iteration = done_before // per_iteration
-  bar = tqdm(total=total, initial=done_before, unit='action', desc='training',
-             disable=not (lead and progress))
-  while int(state.actions) < total:
-    t0 = time.perf_counter()
-    state, log = iterate(state, jnp.bool_(True), jnp.float32(-1.0))
-    new = action_records(log, int(state.actions) - per_iteration, len(trainer.views))
-    records += new
-    iteration += 1
-    so_far = summary(records)
-    rate = (int(state.actions) - done_before) / (time.perf_counter() - start)
-    line = {'iteration': iteration, 'actions': int(state.actions),
-            'wall_s': time.perf_counter() - t0, 'actions_per_s': rate,
-            'loss': float(np.mean(np.asarray(log.loss))),
-            'epsilon': float(np.asarray(log.epsilon)[-1]), 'episodes': int(state.episodes),
-            'updates': int(state.updates), 'skipped_updates': int(state.skipped_updates),
-            'health_resets': int(state.env.health_resets.sum()),
-            'grasp_success': so_far['grasp_success']}
-    if lead:
-      write_records(actions_path, new, 'a')
-      write_records(metrics_path, [line], 'a')
-      for name in SCALARS:
-        events.add_scalar(f'train/{name}', line[name], line['actions'])
-    bar.update(per_iteration)
-    bar.set_postfix(actions_per_s=f'{rate:.2f}', grasp=f'{so_far["grasp_success"]:.2f}',
-                    eps=f'{line["epsilon"]:.2f}', loss=f'{line["loss"]:.3f}')
-    if iteration % config.train.checkpoint_every == 0 or int(state.actions) >= total:
-      checkpoints.save(int(state.actions), state,
-                       {'config': config_lib.to_dict(config), 'iteration': iteration})
+  with tqdm(total=total, initial=done_before, unit='action', desc='training',
+            disable=not (lead and progress)) as bar:
+    while int(state.actions) < total:
+      t0 = time.perf_counter()
+      state, log = iterate(state, jnp.bool_(True), jnp.float32(-1.0))
+      new = action_records(log, int(state.actions) - per_iteration, len(trainer.views))
+      records += new
+      iteration += 1
+      so_far = summary(records)
+      rate = (int(state.actions) - done_before) / (time.perf_counter() - start)
+      line = {'iteration': iteration, 'actions': int(state.actions),
+              'wall_s': time.perf_counter() - t0, 'actions_per_s': rate,
+              'loss': float(np.mean(np.asarray(log.loss))),
+              'epsilon': float(np.asarray(log.epsilon)[-1]), 'episodes': int(state.episodes),
+              'updates': int(state.updates), 'skipped_updates': int(state.skipped_updates),
+              'health_resets': int(state.env.health_resets.sum()),
+              'grasp_success': so_far['grasp_success']}
       if lead:
-        plot_curves(workdir, records, config)
-  bar.close()
+        write_records(actions_path, new, 'a')
+        write_records(metrics_path, [line], 'a')
+        for name in SCALARS:
+          events.add_scalar(f'train/{name}', line[name], line['actions'])
+      bar.update(per_iteration)
+      bar.set_postfix(actions_per_s=f'{rate:.2f}', grasp=f'{so_far["grasp_success"]:.2f}',
+                      eps=f'{line["epsilon"]:.2f}', loss=f'{line["loss"]:.3f}')
+      if iteration % config.train.checkpoint_every == 0 or int(state.actions) >= total:
+        _save(checkpoints, int(state.actions), state,
+              {'config': config_lib.to_dict(config), 'iteration': iteration})
+        if lead:
+          plot_curves(workdir, records, config)
   curve = plot_curves(workdir, records, config) if lead else None
   train_summary = summary(records)
   say(f'training: {json.dumps(train_summary)}; wall {time.perf_counter() - start:.0f} s; '
@@ -176,6 +187,20 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
   say(f'greedy evaluation on random drops: {json.dumps(greedy)}')
   return TrainResult(state=state, summary=train_summary, greedy=greedy, workdir=workdir,
                      curves=curve)
+
+
+def _save(checkpoints: Checkpoints, step: int, state, meta: dict) -> None:
+  """`Checkpoints.save`, or TrainError when the disk refuses it (Orbax writes a step into a
+  temporary folder and renames it when complete: the checkpoints before it are intact)."""
+  try:
+    checkpoints.save(step, state, meta)
+  except Exception as e:  # noqa: BLE001 (Orbax and tensorstore raise many kinds for a full disk)
+    earlier = latest_step(checkpoints.directory.parent)
+    kept = (f'checkpoint {earlier} is intact, --resume continues from it' if earlier is not None
+            else 'no earlier checkpoint')
+    cause = str(e).splitlines()[0][:100] if str(e) else ''
+    raise TrainError(f'cannot write checkpoint {step} ({kept}) in {checkpoints.directory}: '
+                     f'{type(e).__name__}: {cause}') from None
 
 
 # What an evaluation writes to its output folder: refused to a new one without `resume` or
@@ -292,6 +317,17 @@ def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, ru
     out = folders.claim(out, RESULT_FILES, keep=resume, overwrite=overwrite)
   except folders.FolderError as e:
     raise EvaluationError(str(e)) from None
+  try:
+    return _evaluate(cases_of, labels, sources, settings, report, base, protocol, runs,
+                     max_actions, seed, out, save_visuals, video, progress)
+  finally:
+    folders.release(out)
+
+
+def _evaluate(cases_of, labels, sources, settings, report, base, protocol, runs, max_actions,
+              seed, out, save_visuals, video, progress) -> dict:
+  """`evaluate` once its inputs are checked and its output folder is held."""
+  say = print if progress else (lambda *a, **k: None)
   pictures = [name for name, wanted in (('visuals', save_visuals), ('videos', video))
               if wanted and (out / name).exists() and not (out / name).is_dir()]
   if pictures:
@@ -369,8 +405,11 @@ def join_evaluations(evaluations, out, *, overwrite: bool = False) -> dict:
     folders.check(out, RESULT_FILES, overwrite=overwrite)
     report = report_lib.joined_report([str(e) for e in evaluations])
     out = folders.claim(out, RESULT_FILES, overwrite=overwrite)
-    report_lib.write_report(report, out)
-    report_lib.write_whole(out / 'comparison.md', paper.comparisons(report) + '\n')
+    try:
+      report_lib.write_report(report, out)
+      report_lib.write_whole(out / 'comparison.md', paper.comparisons(report) + '\n')
+    finally:
+      folders.release(out)
   except (report_lib.ResultsError, folders.FolderError) as e:
     raise EvaluationError(str(e)) from None
   return report

@@ -31,11 +31,32 @@ def action_records(log, first_action: int, viewpoints: int) -> list[dict]:
           for i in range(k) for e in range(b)]
 
 
+RECORD_FIELDS = {'action': int, 'primitive': str, 'grasp_success': bool}  # what summaries read
+
+
 def read_records(path: pathlib.Path, below: int) -> list[dict]:
-  """Action records before action `below` (a resumed run drops what came after its checkpoint)."""
+  """Action records before action `below` (a resumed run drops what came after its checkpoint).
+  ValueError names the file and line of a record that is not one."""
   if not path.exists():
     return []
-  return [r for r in map(json.loads, path.read_text().splitlines()) if r['action'] < below]
+  records = []
+  try:
+    lines = path.read_text().splitlines()
+  except (OSError, UnicodeDecodeError) as e:
+    raise ValueError(f'{path}: cannot read it ({e})') from None
+  for number, line in enumerate(lines, 1):
+    try:
+      record = json.loads(line)
+    except (ValueError, RecursionError):
+      raise ValueError(f'{path}:{number}: not a JSON action record') from None
+    if not isinstance(record, dict) or not all(
+        isinstance(record.get(k), t) and not (t is int and isinstance(record.get(k), bool))
+        for k, t in RECORD_FIELDS.items()):
+      raise ValueError(f'{path}:{number}: an action record needs '
+                       f'{", ".join(f"{k} ({t.__name__})" for k, t in RECORD_FIELDS.items())}')
+    if record['action'] < below:
+      records.append(record)
+  return records
 
 
 def write_records(path: pathlib.Path, records: list[dict], mode: str) -> None:

@@ -447,3 +447,13 @@ def test_evaluate_and_join_as_library_calls(setup, tmp_path):
       row['cases']['pair']['grasp_success']
   with pytest.raises(api.EvaluationError, match='a baseline has none'):
     mvcoba_jax.evaluate(suites=[str(folder)], baseline='heuristic', protocol='online')
+
+
+def test_videos_where_a_file_stands_are_refused_before_any_run(setup, tmp_path, capsys):
+  out = tmp_path / 'out'
+  out.mkdir()
+  (out / 'videos').write_text('not a folder')
+  assert eval_cli.main(['--baseline', 'heuristic', '--suite', str(setup[0]), '--config', 'tiny',
+                        '--runs', '1', '--out', str(out), '--resume', '--video']) == 2
+  assert 'videos is a file, where the runs\' pictures go' in capsys.readouterr().err
+  assert not (out / 'results.json').exists()

@@ -385,3 +385,25 @@ def _scalars(path) -> dict[str, list[tuple[int, float]]]:
     for value in event.summary.value:
       out.setdefault(value.tag, []).append((event.step, value.simple_value))
   return out
+
+
+def test_a_checkpoint_the_disk_refuses_is_one_line_and_the_earlier_one_resumes(tmp_path):
+  """Resumed under a file size limit (as a full disk would refuse), a run cannot write its next
+  checkpoint: one error line names it and the checkpoint it can resume from, which is intact;
+  a garbled action log is refused naming its line."""
+  workdir = tmp_path / 'run'
+  assert run(workdir, '--set', 'train.total_actions=4') == 0
+  code = ('import resource, signal, sys\n'
+          'signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n'
+          'resource.setrlimit(resource.RLIMIT_FSIZE, (20000, 20000))\n'
+          'from mvcoba_jax.cli import train\n'
+          f'sys.exit(train.main(["--config", "tiny", "--workdir", {str(workdir)!r}, "--resume",'
+          ' "--set", "train.total_actions=8"]))\n')
+  out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, timeout=600)
+  errors = [line for line in out.stderr.splitlines() if line.startswith('error: ')]
+  assert out.returncode == 2 and len(errors) == 1, out.stderr[-2000:]
+  assert 'cannot write checkpoint 8' in errors[0] and 'checkpoint 4 is intact' in errors[0]
+  assert out.stderr.rstrip().splitlines()[-1] == errors[0]  # Orbax logs; no exception escapes
+  assert Checkpoints(workdir).latest() == 4
+  (workdir / 'actions.jsonl').write_text('{"action": 0}\n')
+  assert run(workdir, '--resume', '--set', 'train.total_actions=8') == 2

@@ -163,3 +163,13 @@ def test_evaluation_overrides_change_physics_not_what_training_fixed():
                      ('env.num_rotations', '8'), ('scene.workspace_half', '0.2')):
     with pytest.raises(ConfigError, match=f'--set {key}: fixed by the trained policy'):
       evaluated(trained, [f'{key}={value}'])
+
+
+def test_preset_files_that_are_not_python_or_whose_get_config_raises_are_one_line(tmp_path):
+  from mvcoba_jax.config import load_preset
+  (tmp_path / 'preset.json').write_text('{"seed": 1}')
+  with pytest.raises(ConfigError, match=r'preset.json: a preset file is Python \(.py\)'):
+    load_preset(tmp_path / 'preset.json')
+  (tmp_path / 'raises.py').write_text('def get_config():\n  return 1 / 0\n')
+  with pytest.raises(ConfigError, match='get_config.. raised ZeroDivisionError: division by zero'):
+    load_preset(tmp_path / 'raises.py')

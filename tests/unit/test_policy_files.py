@@ -83,6 +83,8 @@ def test_non_finite_and_wrong_dtype_params(saved, tmp_path):
     (lambda d: d['config']['train'].update(batch_size='eight'), "train.batch_size='eight'"),
     (lambda d: d['config']['perception'].update(heightmap_resolution=0.003), 'must tile'),
     (lambda d: d['source'].update(checkpoint_step='x'), 'not an export'),
+    (lambda d: d['source'].update(checkpoint_step=float('inf')), "checkpoint_step 'inf'"),
+    (lambda d: d['source'].update(checkpoint_step=-3), "checkpoint_step '-3'"),
     (lambda d: d.update(format='other/1'), "format 'other/1'"),
 ])
 def test_bad_model_json(saved, tmp_path, edit, says):
