@@ -1,4 +1,6 @@
-"""Greedy evaluation of a policy on test cases: every (case, run) pair in one jitted call.
+"""Evaluation of a policy on test cases: every (case, run) pair of a suite in lockstep, the
+trained network frozen and greedy (one compiled loop) or going on learning in every run
+(`OnlinePolicy`, the paper's test protocol).
 
 Each run starts from its case (padded to the scene's object slots) with a few millimetres and
 degrees of placement noise, so the n runs of a case differ as real resets do. A run ends when
