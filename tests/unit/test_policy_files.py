@@ -151,3 +151,32 @@ def test_checkpoint_of_another_state_structure_is_refused(tmp_path):
   renamed = {'replay': {'cursor': jnp.int32(0)}, 'actions': jnp.int32(0)}
   with pytest.raises(CheckpointError, match='cannot be read'):
     Checkpoints(tmp_path).restore(renamed, config)
+
+
+def test_fuzzed_model_json_loads_or_is_refused_naming_it(saved, tmp_path):
+  """Generated bad model.json files (fixed seed: a value swapped for an odd one at a random place
+  of the source or config, a key dropped): each loads or is one PolicyError naming the file."""
+  import random
+  _, folder, _ = saved
+  rng = random.Random(1)
+  odd = [None, 'x', -1, 2 ** 70, 1e300, float('inf'), True, [], {}, [[1]]]
+  base = json.loads((folder / 'model.json').read_text())
+  refused = 0
+  for i in range(40):
+    described = json.loads(json.dumps(base))
+    section = rng.choice([described, described['source'], described['config']['train'],
+                          described['config']['env'], described['config']['network']])
+    key = rng.choice(sorted(section))
+    if rng.random() < 0.2:
+      del section[key]
+    else:
+      section[key] = rng.choice(odd)
+    target = tmp_path / f'm{i}'
+    shutil.copytree(folder, target)
+    (target / 'model.json').write_text(json.dumps(described))
+    try:
+      policy.load(target)
+    except policy.PolicyError as e:
+      refused += 1
+      assert str(target / 'model.json') in str(e) or str(target / 'params.npz') in str(e), str(e)
+  assert refused > 20
