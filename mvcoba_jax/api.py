@@ -66,8 +66,9 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
 
   The work directory gets config.json, actions.jsonl (a line per action), metrics.jsonl (a line
   per compiled call; its scalars also as TensorBoard events in tensorboard/), atomic checkpoints
-  every `train.checkpoint_every` calls and at the end, curves.png and eval_summary.json. `resume` continues from its latest checkpoint; a directory
-  holding an earlier run is refused unless `resume` or `overwrite` (which deletes it first).
+  every `train.checkpoint_every` calls and at the end, curves.png and eval_summary.json.
+  `resume` continues from its latest checkpoint; a directory holding an earlier run is refused
+  unless `resume` or `overwrite` (which deletes it first).
   Raises TrainError before anything compiles when the config, directory or checkpoint cannot
   serve. On several devices the tabletops and replay are sharded (`sharding.py`); process 0
   writes the logs.

@@ -102,10 +102,10 @@ def training_groups(rows: dict[str, dict]) -> dict[str, list[str]]:
   """Rows that are one method trained with one config except its seed, named: the method, or
   when it was trained in several configs, the method and the fields where its config differs
   from the value most of them hold (`mvcoba {train.gamma=0.2}`); rows evaluated under another
-  protocol than frozen group apart (`mvcoba [online]`, `mvcoba [no-repeat]`). A training seed met again in a config (one
-  policy evaluated from two folders) goes to a group of its own, so an interval never counts a
-  seed twice. Rows read from results written before evaluation recorded the training config
-  (`settings.training`) form a group of their own per method."""
+  protocol than frozen group apart (`mvcoba [online]`, `mvcoba [no-repeat]`). A training seed
+  met again in a config (one policy evaluated from two folders) goes to a group of its own, so an
+  interval never counts a seed twice. Rows read from results written before evaluation recorded
+  the training config (`settings.training`) form a group of their own per method."""
   found, seeds = {}, {}
   for label, result in rows.items():
     settings = result.get('settings') if isinstance(result.get('settings'), dict) else {}

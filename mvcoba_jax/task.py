@@ -50,7 +50,8 @@ def step(env: Tabletop, views: tuple[int, ...], states: EnvState, obs: perceptio
   healthy = info.healthy
   changed = perception.change_observed(obs, next_obs, info.grasp_success,
                                        config.perception) & healthy
-  reward = jnp.where(healthy, agent.reward(action.primitive, info.grasp_success, changed, train), 0.0)
+  reward = jnp.where(healthy, agent.reward(action.primitive, info.grasp_success, changed, train),
+                     0.0)
   failures = jnp.where(agent.failed(action.primitive, info.grasp_success, changed),
                        failures + 1, 0)
   cleared = ~jnp.any(states.in_play, axis=1)
