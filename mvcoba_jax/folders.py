@@ -31,15 +31,7 @@ def check(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: 
   if not path.is_dir():
     return path
   if path.resolve() not in _held:
-    try:
-      with open(path / LOCK_NAME, 'a+') as lock_file:
-        fcntl.flock(lock_file, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        fcntl.flock(lock_file, fcntl.LOCK_UN)
-    except BlockingIOError:
-      raise FolderError(f'{path} is in use by another mvcoba-jax process; wait for it to end or '
-                        'choose another folder') from None
-    except OSError as e:
-      raise FolderError(f'{path}: {e.strerror}') from None
+    _lock(path).close()  # closing the file releases the lock
   found = [name for name in earlier if (path / name).exists()]
   if found and not keep and not overwrite:
     raise FolderError(f'{path} holds results of an earlier run ({", ".join(found)}); pass '
@@ -59,15 +51,7 @@ def claim(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: 
     raise FolderError(f'{path}: {e.strerror}') from None
   key = path.resolve()
   if key not in _held:
-    try:
-      lock_file = open(path / LOCK_NAME, 'a+')  # noqa: SIM115 (held open for the process)
-      fcntl.flock(lock_file, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
-      lock_file.close()
-      raise FolderError(f'{path} is in use by another mvcoba-jax process; wait for it to end or '
-                        'choose another folder') from None
-    except OSError as e:
-      raise FolderError(f'{path}: {e.strerror}') from None
+    lock_file = _lock(path)
     lock_file.seek(0)
     lock_file.truncate()
     lock_file.write(f'{os.getpid()}\n')
@@ -81,6 +65,24 @@ def claim(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: 
       elif target.exists():
         target.unlink()
   return path
+
+
+def _lock(path: pathlib.Path):
+  """The folder's lock file, open and locked by this process; FolderError when another holds
+  it or it cannot be opened."""
+  try:
+    lock_file = open(path / LOCK_NAME, 'a+')  # noqa: SIM115 (the caller keeps or closes it)
+  except OSError as e:
+    raise FolderError(f'{path}: {e.strerror}') from None
+  try:
+    fcntl.flock(lock_file, fcntl.LOCK_EX | fcntl.LOCK_NB)
+  except OSError as e:
+    lock_file.close()
+    if isinstance(e, BlockingIOError):
+      raise FolderError(f'{path} is in use by another mvcoba-jax process; wait for it to end or '
+                        'choose another folder') from None
+    raise FolderError(f'{path}: {e.strerror}') from None
+  return lock_file
 
 
 def release(folder) -> None:
