@@ -28,7 +28,8 @@ from mvcoba_jax.checkpoint import CheckpointError, Checkpoints, holds_checkpoint
 from mvcoba_jax.config import Config
 from mvcoba_jax.policy import PolicyError, fingerprint
 from mvcoba_jax.policy import load as load_policy
-from mvcoba_jax.run_log import action_records, plot_curves, read_records, summary, write_records
+from mvcoba_jax.run_log import (action_records, plot_curves, plot_sweep, read_records, summary,
+                                write_records)
 from mvcoba_jax.sim.scenarios import ScenarioError, case_to_layout, read_case, stack_layouts
 from mvcoba_jax.sim.shapes import BLOCK_TABLES
 from mvcoba_jax.sim.tabletop import Tabletop
@@ -36,7 +37,7 @@ from mvcoba_jax.suites import suite_files
 from mvcoba_jax.training import Trainer
 
 __all__ = ['EvaluationError', 'RESULT_FILES', 'RUN_FILES', 'TrainError', 'TrainResult',
-           'evaluate', 'join_evaluations', 'load_policy', 'train']
+           'evaluate', 'join_evaluations', 'load_policy', 'sweep', 'sweep_runs', 'train']
 
 # What a run leaves in its work directory: refused to a new run without `resume` or `overwrite`.
 RUN_FILES = ('config.json', 'actions.jsonl', 'metrics.jsonl', 'checkpoints', 'eval_summary.json',
@@ -188,6 +189,65 @@ def _train(config: Config, trainer: Trainer, devices, workdir: pathlib.Path, res
   say(f'greedy evaluation on random drops: {json.dumps(greedy)}')
   return TrainResult(state=state, summary=train_summary, greedy=greedy, workdir=workdir,
                      curves=curve)
+
+
+def sweep_runs(config: Config, workdir, methods=None, seeds=None) -> dict[pathlib.Path, Config]:
+  """A sweep's runs: `config` for every method x seed (None: the config's own) as
+  WORKDIR/METHOD-sSEED -> its config. A method that names its cameras brings them
+  (`config.override`). Raises ConfigError for a method or seed the config cannot take."""
+  runs = {}
+  for method in methods or [config.network.method]:
+    for seed in [config.seed] if seeds is None else seeds:
+      run = config_lib.override(config, f'network.method={method}')
+      runs[pathlib.Path(workdir) / f'{method}-s{seed}'] = config_lib.validate(
+          dataclasses.replace(run, seed=seed))
+  return runs
+
+
+def sweep(config: Config, workdir, *, methods=None, seeds=None, resume: bool = False,
+          overwrite: bool = False, eval_actions: int = 40,
+          progress: bool = True) -> dict[pathlib.Path, TrainResult | None]:
+  """Trains every run of `sweep_runs` in turn (`train`), then writes the sweep's curves to
+  `workdir` (curves-METRIC.png: each method's mean over its seeds, with a band).
+
+  `resume` passes over a run trained to the end with this very config (None in the result),
+  continues one with a checkpoint and starts the others; it is refused when no run holds a
+  checkpoint (a mistyped folder). `mvcoba_jax.evaluate` of the runs' folders then gives each
+  method's interval over the seeds.
+  """
+  try:
+    runs = sweep_runs(config, workdir, methods, seeds)
+  except config_lib.ConfigError as e:
+    raise TrainError(str(e)) from None
+  if resume and not any(holds_checkpoint(w) for w in runs):
+    raise TrainError(f'resume: no run of the sweep in {workdir} holds a checkpoint')
+  say = print if progress else (lambda *a, **k: None)
+  results = {}
+  for i, (run, run_config) in enumerate(runs.items()):
+    say(f'sweep {i + 1}/{len(runs)}: {run}', flush=True)
+    if resume and finished(run, run_config):
+      say('  finished already: its last checkpoint, config and greedy evaluation are there')
+      results[run] = None
+      continue
+    results[run] = train(run_config, run, resume=resume and holds_checkpoint(run),
+                         overwrite=overwrite, eval_actions=eval_actions, progress=progress)
+  if jax.process_index() == 0:
+    for path in plot_sweep(list(runs), config.train.curve_window, pathlib.Path(workdir)):
+      say(f'sweep curves: {path}')
+  return results
+
+
+def finished(workdir: pathlib.Path, config: Config) -> bool:
+  """Whether a run has nothing left to do: trained to the end with this very config and
+  evaluated (a resumed sweep passes over it without compiling)."""
+  step = latest_step(workdir)
+  try:
+    saved = json.loads((workdir / 'config.json').read_text())
+  except (OSError, json.JSONDecodeError):
+    return False
+  same = saved == json.loads(json.dumps(config_lib.to_dict(config)))  # tuples as JSON lists
+  return (step is not None and step >= config.train.total_actions and same
+          and (workdir / 'eval_summary.json').is_file())
 
 
 def _save(checkpoints: Checkpoints, step: int, state, meta: dict) -> None:

@@ -16,17 +16,13 @@ or `--seeds` it is a sweep folder: every method x seed trains in turn into its o
 from __future__ import annotations
 
 import argparse
-import json
-import pathlib
 import sys
 
 import jax
 
 from mvcoba_jax import api, methods
 from mvcoba_jax import config as config_lib
-from mvcoba_jax.checkpoint import holds_checkpoint, latest_step
 from mvcoba_jax.cli import fail
-from mvcoba_jax.run_log import plot_sweep
 
 
 def parse(argv):
@@ -59,62 +55,32 @@ def parse(argv):
     parser.error('--resume continues a run and --overwrite replaces it: give one')
   if args.method and args.methods or args.seed is not None and args.seeds:
     parser.error('give --method/--seed for one run or --methods/--seeds for a sweep, not both')
-  sweep = bool(args.methods or args.seeds)
-  runs = {}  # work directory -> config
-  for method in args.methods or [args.method]:
-    for seed in args.seeds or [args.seed]:
-      overrides = list(args.overrides)
-      if method:
-        overrides.append(f'network.method={method}')
-      if seed is not None:
-        overrides.append(f'seed={seed}')
-      try:
-        config = config_lib.resolve(args.config, overrides)
-      except config_lib.ConfigError as e:
-        parser.error(str(e))
-      name = f'{config.network.method}-s{config.seed}'
-      runs[pathlib.Path(args.workdir) / name if sweep else pathlib.Path(args.workdir)] = config
-  return args, runs, sweep
+  try:
+    config = config_lib.resolve(args.config, [
+        *args.overrides, *([f'network.method={args.method}'] if args.method else []),
+        *([f'seed={args.seed}'] if args.seed is not None else [])])
+    if args.methods or args.seeds:  # a sweep: its runs' configs checked before any trains
+      api.sweep_runs(config, args.workdir, args.methods, args.seeds)
+  except config_lib.ConfigError as e:
+    parser.error(str(e))
+  return args, config
 
 
 def main(argv=None) -> int:
-  args, runs, sweep = parse(argv)
+  args, config = parse(argv)
   if args.distributed:
     jax.distributed.initialize(coordinator_address=args.coordinator,
                                num_processes=args.num_processes, process_id=args.process_id)
-  if sweep and args.resume and not any(holds_checkpoint(w) for w in runs):
-    print(f'error: --resume: no run of the sweep in {args.workdir} holds a checkpoint',
-          file=sys.stderr)
-    return 2
-  for i, (workdir, config) in enumerate(runs.items()):
-    if sweep:
-      print(f'sweep {i + 1}/{len(runs)}: {workdir}', flush=True)
-      if args.resume and finished(workdir, config):
-        print('  finished already: its last checkpoint, config and greedy evaluation are there')
-        continue
-    try:
-      api.train(config, workdir, resume=args.resume and (holds_checkpoint(workdir) or not sweep),
-                overwrite=args.overwrite, eval_actions=args.eval_actions)
-    except api.TrainError as e:
-      return fail(e)
-  if sweep and jax.process_index() == 0:
-    window = next(iter(runs.values())).train.curve_window
-    for path in plot_sweep(list(runs), window, pathlib.Path(args.workdir)):
-      print(f'sweep curves: {path}')
-  return 0
-
-
-def finished(workdir: pathlib.Path, config) -> bool:
-  """Whether a run of a sweep has nothing left to do: trained to the end with this very config
-  and evaluated (a resumed sweep passes over it without compiling)."""
-  step = latest_step(workdir)
   try:
-    saved = json.loads((workdir / 'config.json').read_text())
-  except (OSError, json.JSONDecodeError):
-    return False
-  same = saved == json.loads(json.dumps(config_lib.to_dict(config)))  # tuples as JSON lists
-  return (step is not None and step >= config.train.total_actions and same
-          and (workdir / 'eval_summary.json').is_file())
+    if args.methods or args.seeds:
+      api.sweep(config, args.workdir, methods=args.methods, seeds=args.seeds,
+                resume=args.resume, overwrite=args.overwrite, eval_actions=args.eval_actions)
+    else:
+      api.train(config, args.workdir, resume=args.resume, overwrite=args.overwrite,
+                eval_actions=args.eval_actions)
+  except api.TrainError as e:
+    return fail(e)
+  return 0
 
 
 if __name__ == '__main__':

@@ -11,6 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+import mvcoba_jax
 from mvcoba_jax import agent, networks
 from mvcoba_jax import replay as replay_lib
 from mvcoba_jax.checkpoint import Checkpoints
@@ -219,10 +220,11 @@ def test_sweep_of_methods_and_seeds_trains_evaluates_and_aggregates(tmp_path, ca
   """2 methods x 2 seeds train in turn into their own folders; one evaluation of all four gives
   each method's mean and interval over its seeds."""
   sweep = tmp_path / 'sweep'
-  assert train_cli.main(['--config', TINY, '--workdir', str(sweep), '--eval-actions', '1',
-                         '--methods', 'mvcoba', 'grasp_only', '--seeds', '0', '1',
-                         '--set', 'train.total_actions=4']) == 0
+  trained = mvcoba_jax.sweep(resolve(TINY, ['train.total_actions=4']), sweep,
+                             methods=['mvcoba', 'grasp_only'], seeds=[0, 1], eval_actions=1)
+  assert [int(r.state.actions) for r in trained.values()] == [4] * 4
   runs = sorted(p.name for p in sweep.iterdir() if p.is_dir())
+  assert runs == sorted(w.name for w in trained)
   assert runs == ['grasp_only-s0', 'grasp_only-s1', 'mvcoba-s0', 'mvcoba-s1']
   assert (sweep / 'curves-grasp_success.png').is_file()
   assert (sweep / 'curves-action_efficiency.png').is_file()

@@ -1,0 +1,113 @@
+"""The paper's comparison as one call (`mvcoba-reproduce`): every method x seed trained for the
+paper's 3000 actions, every suite evaluated with 5 runs per case under each test protocol, our
+intervals over seeds beside the paper's figures.
+
+    from mvcoba_jax.config import resolve
+    from mvcoba_jax.reproduction import reproduce
+    reports = reproduce(resolve('tiny'), methods=['mvcoba', 'vpg'], seeds=[0, 1], actions=200,
+                        runs=2, suites=['occluded'], workdir='runs/rep', out='runs/rep-tables')
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import pathlib
+import shutil
+import time
+
+from mvcoba_jax import api, folders, paper
+from mvcoba_jax.config import Config, ConfigError, validate
+from mvcoba_jax.checkpoint import holds_checkpoint
+from mvcoba_jax.report import write_whole
+from mvcoba_jax.suites import suite_files
+
+# Rough speeds on a 2-core CPU, native backend, default preset (docs/results/reproduction.md:
+# 54144 actions in 88 min, 1350 case runs in 55 min): what the expected wall time is computed from.
+TRAIN_ACTIONS_PER_S = 10.0
+ONLINE_COST = 2.3  # online over frozen evaluation time: 1.9-2.7 (benchmarks/online_eval.py)
+EVAL_S_PER_CASE_RUN = {'frozen': 2.5, 'online': 2.5 * ONLINE_COST}
+
+PROTOCOLS = {
+    'frozen': 'the trained network, frozen, acts greedily in every run',
+    'online': 'every run starts from the trained network and takes one SGD step after each of '
+              'its actions (VPG\'s and the MV-COBA authors\' test protocol)',
+}
+
+
+def reproduce(config: Config, *, methods=paper.PAPER_NAMES, seeds=(0, 1, 2), actions: int = 3000,
+              runs: int = 5, max_actions: int = 60, suites=('random', 'ordered', 'occluded'),
+              workdir='runs/reproduction', out='docs/results/reproduction',
+              protocols=tuple(PROTOCOLS), progress: bool = True) -> dict[str, dict]:
+  """Trains `methods` x `seeds` of `config` for `actions` actions each into WORKDIR/METHOD-sSEED
+  (`api.sweep`), evaluates them on `suites` under each of `protocols` (`api.evaluate`; frozen in
+  `out`, online in OUT/online) and writes each protocol's comparison.md (ours beside the
+  paper's, with the time spent) and the sweep's curves to `out`. Returns protocol -> report.
+
+  Resumes where a killed call stopped: training from each run's latest checkpoint, evaluation
+  keeping every row it finished. Raises api.TrainError or api.EvaluationError before anything
+  trains when an input cannot serve (the evaluation's work bounds, the output folders).
+  """
+  say = print if progress else (lambda *a, **k: None)
+  unknown = set(protocols) - set(PROTOCOLS)
+  if unknown or not protocols:
+    raise api.EvaluationError(f'protocols {sorted(unknown) or "none"}: give some of '
+                              f'{", ".join(PROTOCOLS)}')
+  workdir, out = pathlib.Path(workdir), pathlib.Path(out)
+  try:  # what the evaluation would refuse, refused before the sweep trains
+    files = suite_files(list(suites))
+    api.check_work(runs, max_actions, files)
+    for folder in [workdir, *(protocol_folder(out, p) for p in protocols)]:
+      folders.check(folder, keep=True)
+  except folders.FolderError as e:
+    raise api.EvaluationError(str(e)) from None
+  try:
+    config = validate(dataclasses.replace(config, train=dataclasses.replace(
+        config.train, total_actions=actions)))
+  except ConfigError as e:
+    raise api.TrainError(str(e)) from None
+  trainings = len(methods) * len(seeds)
+  cases = sum(len(f) for f in files.values())
+  expected = (trainings * actions / TRAIN_ACTIONS_PER_S
+              + sum(EVAL_S_PER_CASE_RUN[p] for p in protocols) * trainings * cases * runs)
+  say(f'{trainings} trainings of {actions} actions, then {trainings} policies x {cases} cases x '
+      f'{runs} runs: expected about {expected / 60:.0f} min on a 2-core CPU', flush=True)
+  start = time.perf_counter()
+  resume = workdir.is_dir() and any(holds_checkpoint(p) for p in workdir.iterdir())
+  dirs = list(api.sweep(config, workdir, methods=methods, seeds=seeds, resume=resume,
+                        progress=progress))
+  reports, eval_s = {}, 0.0
+  for protocol in protocols:
+    reports[protocol] = api.evaluate(dirs, suites, runs=runs, max_actions=max_actions,
+                                     protocol=protocol, out=protocol_folder(out, protocol),
+                                     resume=True, progress=progress)
+    eval_s += evaluation_seconds(reports[protocol])
+  train_s = training_seconds(dirs)
+  timing = (f'Expected wall time {expected / 60:.0f} min; spent {(train_s + eval_s) / 60:.0f} min '
+            f'({train_s / 60:.0f} training, {eval_s / 60:.0f} evaluating: the sums of the '
+            f'runs\' logged times, over every invocation); this invocation '
+            f'{(time.perf_counter() - start) / 60:.0f} min.')
+  texts = {p: f'Test protocol: {PROTOCOLS[p]}.\n\n{paper.comparisons(r)}'
+           for p, r in reports.items()}
+  for protocol, text in texts.items():
+    write_whole(protocol_folder(out, protocol) / 'comparison.md', f'{text}\n\n{timing}\n')
+  curves = [pathlib.Path(shutil.copy(p, out)).name for p in sorted(workdir.glob('curves-*.png'))]
+  say('\n' + '\n\n'.join(texts.values()) + f'\n\n{timing}\nwrote comparison.md of each '
+      f'protocol under {out} and the sweep\'s training curves ({", ".join(curves)})')
+  return reports
+
+
+def protocol_folder(out: pathlib.Path, protocol: str) -> pathlib.Path:
+  """Where a protocol's tables go: `out` itself for the frozen one, OUT/online for online."""
+  return out if protocol == 'frozen' else out / protocol
+
+
+def training_seconds(workdirs) -> float:
+  """Seconds the training iterations of these runs took, from their metrics.jsonl (a resumed
+  run's log holds the time of every invocation)."""
+  return sum(json.loads(line)['wall_s'] for w in workdirs
+             for line in (w / 'metrics.jsonl').read_text().splitlines() if line)
+
+
+def evaluation_seconds(report: dict) -> float:
+  """Seconds the rows of an evaluation's results.json took (compile included)."""
+  return sum(row['wall_s'] or 0.0 for rows in report.values() for row in rows.values())

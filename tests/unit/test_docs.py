@@ -1,0 +1,31 @@
+"""The paths README.md and docs/ name exist: a file moved or renamed takes its mentions along."""
+import pathlib
+import re
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+TOP = ('mvcoba_jax/', 'tests/', 'docs/', 'examples/', 'benchmarks/', 'experiments/', 'pretrained/',
+       '.ci/')
+# `path`, optionally with :line or a trailing call; markdown links (target)
+NAMED = re.compile(r'`([\w./-]+?)(?::\w+)?`|\]\(([^)#\s]+)')
+
+
+def _documents():
+  return [ROOT / 'README.md', *sorted((ROOT / 'docs').glob('*.md')),
+          *sorted((ROOT / 'docs' / 'results').glob('*.md'))]
+
+
+def _named(document: pathlib.Path):
+  """(line number, path) for every repository path the document names: a code span starting at
+  a top-level folder of the repository, or a relative markdown link (from the document)."""
+  for number, line in enumerate(document.read_text().splitlines(), 1):
+    for span, link in NAMED.findall(line):
+      if span.startswith(TOP) and not any(c in span for c in '*<>{}'):
+        yield number, ROOT / span
+      elif link and '://' not in link and not link.startswith('mailto:'):
+        yield number, document.parent / link
+
+
+def test_every_path_the_docs_name_exists():
+  missing = [f'{d.relative_to(ROOT)}:{n}: {p.relative_to(ROOT) if p.is_relative_to(ROOT) else p}'
+             for d in _documents() for n, p in _named(d) if not p.exists()]
+  assert not missing, '\n'.join(missing)
