@@ -90,7 +90,8 @@ def main(argv=None) -> int:
         (eval_dir / 'done').touch()
       evaluations.append(str(eval_dir))
   if evaluations:
-    run(['mvcoba-eval', '--tables', *evaluations, '--out', str(work / 'tables')], log, 'tables')
+    run(['mvcoba-eval', '--tables', *evaluations, '--out', str(work / 'tables'), '--overwrite'],
+        log, 'tables')
   return 0
 
 

@@ -10,8 +10,9 @@ import jax.numpy as jnp
 import optax
 from flax import struct
 
-from mvcoba_jax import methods, networks, suppression
+from mvcoba_jax import networks, suppression
 from mvcoba_jax.config import Config, TrainConfig
+from mvcoba_jax.methods import Method
 from mvcoba_jax.sim.geometry import pixel_to_world
 from mvcoba_jax.sim.primitives import GRASP, PUSH, Action
 
@@ -25,45 +26,32 @@ class PixelAction:
   col: jnp.ndarray  # (B,) int32
 
 
-def rule_primitive(method: str, changed, best_per_primitive):
-  """The primitive the method's rule picks (`methods.RULES`): change observation, max-Q, or
-  always grasp.
-
-  `changed` is whether the previous action changed the scene (True before the first action);
-  `best_per_primitive` is (B, 2) max Q of each primitive.
-  """
-  rule = methods.get(method).rule
-  if rule == 'change':
-    return jnp.where(changed, GRASP, PUSH).astype(jnp.int32)
-  if rule == 'max_q':
-    return jnp.argmax(best_per_primitive, axis=-1).astype(jnp.int32)
-  return jnp.full(changed.shape, GRASP, jnp.int32)
-
-
-def rule_maps(q, depth, views: tuple[int, ...], method: str, config: Config):
+def rule_maps(q, depth, method: Method, config: Config):
   """The maps (B, 2, K, R, R) the method's rule compares and takes the argmax of: its Q maps
   `q` of every rotation, or for a suppressing method (CPG) `suppression.scores` of them."""
-  if not methods.get(method).suppress:
+  if not method.suppress:
     return q
-  return suppression.scores(q, surface_height(depth, views), config.perception.heightmap_resolution)
+  return suppression.scores(q, surface_height(depth, method.views),
+                            config.perception.heightmap_resolution)
 
 
-def greedy_actions(q, changed, method: str) -> PixelAction:
+def greedy_actions(q, changed, method: Method) -> PixelAction:
   """The rule's primitive at the argmax rotation and pixel of its maps (B, 2, K, R, R): Q maps,
-  or `rule_maps` of them."""
+  or `rule_maps` of them. `changed` is whether the previous action changed the scene (True
+  before the first action)."""
   b, _, k, r, _ = q.shape
   flat = q.reshape(b, 2, k * r * r)
-  primitive = rule_primitive(method, changed, flat.max(axis=-1))
+  primitive = method.rule.pick(changed, flat.max(axis=-1))
   chosen = jnp.take_along_axis(flat, primitive[:, None, None], axis=1)[:, 0]
   rotation, row, col = jnp.unravel_index(jnp.argmax(chosen, axis=-1), (k, r, r))
   return PixelAction(primitive=primitive, rotation=rotation.astype(jnp.int32),
                      row=row.astype(jnp.int32), col=col.astype(jnp.int32))
 
 
-def epsilon_greedy(q, changed, occupied, epsilon, key, method: str):
+def epsilon_greedy(q, changed, occupied, epsilon, key, method: Method):
   """Greedy actions, each replaced with probability epsilon by a random one; also says which.
 
-  A random action keeps the rule's primitive (max-Q methods draw the primitive too) and draws a
+  A random action keeps the rule's primitive (or draws it, `Rule.explores_primitive`) and draws a
   rotation and a pixel where something stands (`occupied`, (B, R, R); anywhere on an empty
   table). Uniform pixels land on bare table most of the time in a 10-object scene: wasted
   actions that teach only what the network learns in its first minutes. With them, a default
@@ -74,7 +62,7 @@ def epsilon_greedy(q, changed, occupied, epsilon, key, method: str):
   k_explore, k_prim, k_rot, k_pixel = jax.random.split(key, 4)
   explore = jax.random.uniform(k_explore, (b,)) < epsilon
   primitive = greedy.primitive
-  if methods.get(method).rule == 'max_q':
+  if method.rule.explores_primitive:
     primitive = jnp.where(explore, jax.random.randint(k_prim, (b,), 0, 2), primitive)
   mask = occupied.reshape(b, r * r)
   mask = mask | ~jnp.any(mask, axis=-1, keepdims=True)
@@ -113,18 +101,18 @@ def failed(primitive, grasp_success, changed):
   return jnp.where(primitive == GRASP, ~grasp_success, ~changed)
 
 
-def future_value(q_next, changed, method: str, train: TrainConfig):
-  """max Q(s', a') over the primitive the rule picks at s' (over both for max-Q rules and with
-  `train.future_max='both'`), (B,)."""
+def future_value(q_next, changed, method: Method, train: TrainConfig):
+  """max Q(s', a') over the primitive the rule picks at s' (over both for a rule whose target
+  says so, `Rule.future_over_both`, and with `train.future_max='both'`), (B,)."""
   b = q_next.shape[0]
   best = q_next.reshape(b, 2, -1).max(axis=-1)
-  if methods.get(method).rule == 'max_q' or train.future_max == 'both':
+  if method.rule.future_over_both or train.future_max == 'both':
     return best.max(axis=-1)
-  primitive = rule_primitive(method, changed, best)
+  primitive = method.rule.pick(changed, best)
   return jnp.take_along_axis(best, primitive[:, None], axis=1)[:, 0]
 
 
-def target_value(q_next, changed, done, rew, method: str, train: TrainConfig):
+def target_value(q_next, changed, done, rew, method: Method, train: TrainConfig):
   """y = r + gamma * max Q_target(s', a') over `future_value`'s primitives (0 where done)."""
   return bootstrap(future_value(q_next, changed, method, train), done, rew, train)
 

@@ -22,7 +22,7 @@ import numpy as np
 import optax
 from flax import nnx, struct
 
-from mvcoba_jax import agent, networks, perception, task
+from mvcoba_jax import agent, methods, networks, perception, task
 from mvcoba_jax import replay as replay_lib
 from mvcoba_jax.config import Config
 from mvcoba_jax.metrics import RunLog
@@ -129,8 +129,8 @@ class OnlinePolicy:
   def __init__(self, model: networks.QNetwork, config: Config):
     self.graphdef, self.params = nnx.split(model)
     self.config = config
-    self.method = config.network.method
-    self.views = networks.views_used(self.method)
+    self.method = methods.get(config.network.method)
+    self.views = self.method.views
     self.optimizer = agent.optimizer(config.train)
 
   def q_maps(self, params, obs: perception.Observation, rotations=None):
@@ -156,7 +156,7 @@ class OnlinePolicy:
     (0.85 s against 2.7 s for 18 runs of the default preset)."""
     one = lambda args: self.q_maps(args[0], jax.tree.map(lambda x: x[None], args[1]))[0]
     q = jax.lax.map(one, (learner.params, obs))
-    maps = agent.rule_maps(q, obs.depth, self.views, self.method, self.config)
+    maps = agent.rule_maps(q, obs.depth, self.method, self.config)
     return agent.greedy_actions(maps, changed, self.method), q
 
   def learn(self, learner: Learner, q, changed, active) -> Learner:
@@ -413,13 +413,13 @@ def losses(trace: Trace, names: list[str], config: Config) -> list[dict]:
   return records
 
 
-def greedy_policy(q_maps: Callable, method: str, config, no_repeat: bool = False) -> Policy:
+def greedy_policy(q_maps: Callable, method: methods.Method, config,
+                  no_repeat: bool = False) -> Policy:
   """A trained network's greedy policy: `q_maps(obs)` -> (N, 2, K, R, R). With `no_repeat` it
   never takes a failed action of its run again while nothing has changed: the next best one."""
-  views = networks.views_used(method)
 
   def policy(obs, changed, keys, failed):
-    maps = agent.rule_maps(q_maps(obs), obs.depth, views, method, config)
+    maps = agent.rule_maps(q_maps(obs), obs.depth, method, config)
     if no_repeat:
       maps = without(maps, *failed)
     return agent.greedy_actions(maps, changed, method)
@@ -530,8 +530,8 @@ def make_policy(method_source, config, online: bool = False, no_repeat: bool = F
     return heuristic_policy(config.env.num_rotations), (0, 1)
   config, model, _ = method_source
   if online:
-    return OnlinePolicy(model, config), networks.views_used(config.network.method)
+    return OnlinePolicy(model, config), methods.get(config.network.method).views
   graphdef, params = nnx.split(model)
-  method = config.network.method
+  method = methods.get(config.network.method)
   q_maps = lambda obs: nnx.merge(graphdef, params)(obs.color, obs.depth)
-  return greedy_policy(q_maps, method, config, no_repeat), networks.views_used(method)
+  return greedy_policy(q_maps, method, config, no_repeat), method.views

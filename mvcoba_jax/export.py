@@ -45,32 +45,30 @@ def onnx_model(config: Config, model: networks.QNetwork):
 
   graphdef, params = nnx.split(model)
   side, views = perception.grid_size(config), len(config.scene.cameras)
-  method = config.network.method
+  method = methods.get(config.network.method)
   outputs = output_names(method)
 
   def forward(color, depth):
     q = nnx.merge(graphdef, params)(color, depth)
     if len(outputs) == 1:
       return q
-    return q, agent.rule_maps(q, depth, networks.views_used(method), method, config)
+    return q, agent.rule_maps(q, depth, method, config)
 
   return to_onnx(forward, [jax.ShapeDtypeStruct((1, views, side, side, 3), jnp.float32),
                            jax.ShapeDtypeStruct((1, views, side, side), jnp.float32)],
-                 model_name=f'mvcoba_{method}_q', opset=ONNX_OPSET,
+                 model_name=f'mvcoba_{method.name}_q', opset=ONNX_OPSET,
                  input_names=['color', 'depth'], output_names=list(outputs))
 
 
-def output_names(method: str) -> tuple[str, ...]:
+def output_names(method: methods.Method) -> tuple[str, ...]:
   """The graph's outputs: Q maps, and for a suppressing method the scores its rule compares."""
-  return ('q', 'score') if methods.get(method).suppress else ('q',)
+  return ('q', 'score') if method.suppress else ('q',)
 
 
-def action_rule(method: str) -> dict:
-  """The primitive choice of `agent.rule_primitive`, in words and as a name the example reads."""
-  name = methods.get(method).rule
-  text = methods.RULES[name]
+def action_rule(method: methods.Method) -> dict:
+  """The method's `Rule`, in words and by the name a runtime outside JAX applies it by."""
   maps = output_names(method)[-1]
-  return {'name': name, 'maps': maps, 'primitive': text,
+  return {'name': method.rule.name, 'maps': maps, 'primitive': method.rule.text,
           'pixel': (f'argmax of that primitive\'s {maps} over (rotation, row, col), flattened in '
                     'that order; the first maximum wins'),
           'greedy': 'exploration (epsilon-greedy) is a training matter and is not exported'}
@@ -79,9 +77,9 @@ def action_rule(method: str) -> dict:
 def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir) -> dict:
   """The content of model.json."""
   side, k = perception.grid_size(config), config.env.num_rotations
-  views, num_views = networks.views_used(config.network.method), len(config.scene.cameras)
+  method = methods.get(config.network.method)
+  views, num_views = method.views, len(config.scene.cameras)
   res, half = config.perception.heightmap_resolution, config.scene.workspace_half
-  spec = methods.get(config.network.method)
   return {
       'format': FORMAT,
       'source': {'workdir': str(pathlib.Path(workdir).resolve()), 'checkpoint_step': step},
@@ -94,7 +92,7 @@ def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir) 
                  'naming': 'the Flax NNX state path joined by "/" (list indices as numbers)'},
       'primitives': {'push': PUSH, 'grasp': GRASP},
       'no_action': networks.NO_ACTION,
-      'action_rule': action_rule(config.network.method),
+      'action_rule': action_rule(method),
       'rotations': {'num_rotations': k,
                     'angles_rad': rotation_angle(np.arange(k), k).tolist(),
                     'formula': 'angle(k) = k * 2 * pi / num_rotations',
@@ -127,12 +125,12 @@ def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir) 
               {'name': 'score', 'shape': [1, 2, k, side, side], 'dtype': 'float32',
                'meaning': 'what the action rule compares: (Q + 0.1) x the suppression factor '
                           'of each action (CPG), no_action where suppressed; Q where nothing '
-                          'is allowed'}] if spec.suppress else []),
+                          'is allowed'}] if method.suppress else []),
           'in_graph': ['views_used selection'] + (
-              ['fusion of the views into one, the highest point per cell'] if spec.fuse else []) + [
+              ['fusion of the views into one, the highest point per cell'] if method.fuse else []) + [
                   'rotation of the inputs by -angle(k) for each k (bilinear, zero fill)',
                   'input normalisation', 'the FCNs', 'rotation of the Q maps back by +angle(k)'
-              ] + (['suppression of actions that cannot act (score)'] if spec.suppress else []),
+              ] + (['suppression of actions that cannot act (score)'] if method.suppress else []),
           'outside_graph': ['the action rule and the argmax (action_rule)',
                             'pixel -> world (pixel_to_world)']},
   }

@@ -1,37 +1,58 @@
 """The methods: what each one's networks score and see, and the rule that picks its primitive.
 
 Networks, agent, export and the command lines read this table, so a new method is one `register`
-call (plus its test). Primitives are `sim.primitives.PUSH` (0) and `GRASP` (1); views index the
-cameras (`Observation`'s V axis).
+call (plus its test), and a new rule one `Rule`: the agent asks the rule, never its name.
+Primitives are `sim.primitives.PUSH` (0) and `GRASP` (1); views index the cameras
+(`Observation`'s V axis).
 """
 from __future__ import annotations
 
 import dataclasses
+from typing import Callable
+
+import jax.numpy as jnp
 
 from mvcoba_jax.sim.config import CameraConfig, SceneConfig
 from mvcoba_jax.sim.primitives import GRASP, PUSH
 
-# How a method picks its primitive, and how its Q-learning target and exploration follow:
-# 'change' (MV-COBA's rule): grasp if the previous action changed the scene (also before the
-#   first action of an episode), else push; the target's max is over the primitive the rule
-#   would pick at the next state.
-# 'max_q' (VPG): the primitive whose Q map holds the larger maximum (ties: push); the target's
-#   max is over both; exploration draws the primitive too.
-# 'grasp': always grasp.
-RULES = {
-    'change': 'grasp if the previous action changed the scene (also before the first action of '
-              'an episode), else push',
-    'max_q': 'the primitive whose Q map holds the larger maximum (ties: push)',
-    'grasp': 'always grasp',
-}
+@dataclasses.dataclass(frozen=True)
+class Rule:
+  """How a method picks its primitive, and what follows from it: its Q-learning target's max and
+  its exploration. `name` is how model.json tells a runtime outside JAX which rule to apply."""
+  name: str
+  text: str  # the rule in words (model.json)
+  pick: Callable  # (changed (B,) bool, best (B, 2) each primitive's max) -> (B,) int32 primitive
+  future_over_both: bool  # the target's max is over both primitives' maps, else the one picked at s'
+  explores_primitive: bool  # a random action draws its primitive too, else keeps the rule's
+
+
+# MV-COBA's change observation: `changed` is True also before the first action of an episode.
+CHANGE = Rule('change', 'grasp if the previous action changed the scene (also before the first '
+              'action of an episode), else push',
+              lambda changed, best: jnp.where(changed, GRASP, PUSH).astype(jnp.int32),
+              future_over_both=False, explores_primitive=False)
+MAX_Q = Rule('max_q', 'the primitive whose Q map holds the larger maximum (ties: push)',
+             lambda changed, best: jnp.argmax(best, axis=-1).astype(jnp.int32),
+             future_over_both=True, explores_primitive=True)
+ALWAYS_GRASP = Rule('grasp', 'always grasp',
+                    lambda changed, best: jnp.full(changed.shape, GRASP, jnp.int32),
+                    future_over_both=False, explores_primitive=False)
+RULES = {rule.name: rule for rule in (CHANGE, MAX_Q, ALWAYS_GRASP)}
+
+
+@dataclasses.dataclass(frozen=True)
+class Fcn:
+  """One fully convolutional network of a method: the primitives it scores, the camera views
+  it reads."""
+  primitives: tuple[int, ...]
+  views: tuple[int, ...]
 
 
 @dataclasses.dataclass(frozen=True)
 class Method:
   name: str
-  # One entry per fully convolutional network: (primitives it scores, camera views it sees).
-  fcns: tuple[tuple[tuple[int, ...], tuple[int, ...]], ...]
-  rule: str  # a key of RULES
+  fcns: tuple[Fcn, ...]
+  rule: Rule
   # Its networks read one heightmap fused from their views, the highest point per cell (MVP's
   # fusion of viewpoints), instead of one stream pair per view.
   fuse: bool = False
@@ -42,9 +63,10 @@ class Method:
   cameras: tuple[CameraConfig, ...] = ()
 
   def __post_init__(self):
-    if self.rule not in RULES:
-      raise ValueError(f'method {self.name!r}: rule {self.rule!r} is not one of {", ".join(RULES)}')
-    scored = [p for prims, _ in self.fcns for p in prims]
+    if not isinstance(self.rule, Rule):
+      raise ValueError(f'method {self.name!r}: its rule must be a methods.Rule (for example one '
+                       f'of {", ".join(RULES)}), got {self.rule!r}')
+    scored = [p for fcn in self.fcns for p in fcn.primitives]
     if not scored or len(scored) != len(set(scored)) or not set(scored) <= {PUSH, GRASP}:
       raise ValueError(f'method {self.name!r}: its networks must score each primitive at most '
                        f'once, got {scored}')
@@ -56,7 +78,7 @@ class Method:
   @property
   def views(self) -> tuple[int, ...]:
     """Camera views its networks read, in order."""
-    return tuple(sorted({v for _, views in self.fcns for v in views}))
+    return tuple(sorted({v for fcn in self.fcns for v in fcn.views}))
 
 
 _REGISTRY: dict[str, Method] = {}
@@ -81,14 +103,14 @@ def get(name: str) -> Method:
   return _REGISTRY[name]
 
 
-register(Method('mvcoba', fcns=(((PUSH, GRASP), (0, 1)),), rule='change'))
-register(Method('mvcoba_2fcn', fcns=(((PUSH,), (0,)), ((GRASP,), (1,))), rule='change'))
-register(Method('vpg', fcns=(((PUSH,), (0,)), ((GRASP,), (0,))), rule='max_q'))
-register(Method('grasp_only', fcns=(((GRASP,), (0,)),), rule='grasp'))
+register(Method('mvcoba', fcns=(Fcn((PUSH, GRASP), (0, 1)),), rule=CHANGE))
+register(Method('mvcoba_2fcn', fcns=(Fcn((PUSH,), (0,)), Fcn((GRASP,), (1,))), rule=CHANGE))
+register(Method('vpg', fcns=(Fcn((PUSH,), (0,)), Fcn((GRASP,), (0,))), rule=MAX_Q))
+register(Method('grasp_only', fcns=(Fcn((GRASP,), (0,)),), rule=ALWAYS_GRASP))
 # MVP-like (Morrison et al. 2019): grasp only, one camera that looks from every one of its four
 # poses before each grasp (the two fixed cameras' and two across the other axis), fused.
-register(Method('mvp', fcns=(((GRASP,), (0, 1, 2, 3)),), rule='grasp', fuse=True,
+register(Method('mvp', fcns=(Fcn((GRASP,), (0, 1, 2, 3)),), rule=ALWAYS_GRASP, fuse=True,
                 cameras=SceneConfig().cameras + (CameraConfig(pos=(0.0, 0.35, 0.65)),
                                                  CameraConfig(pos=(0.0, -0.35, 0.65)))))
 # CPG (Collaborative Pushing-Grasping): VPG's two FCNs and max-Q, over suppressed Q maps.
-register(Method('cpg', fcns=(((PUSH,), (0,)), ((GRASP,), (0,))), rule='max_q', suppress=True))
+register(Method('cpg', fcns=(Fcn((PUSH,), (0,)), Fcn((GRASP,), (0,))), rule=MAX_Q, suppress=True))

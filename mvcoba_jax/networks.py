@@ -34,11 +34,6 @@ NO_ACTION = -1e9  # Q of a primitive a method cannot execute: max-Q never picks 
 DENSENET121_BLOCKS = (6, 12, 24, 16)
 
 
-def views_used(method: str) -> tuple[int, ...]:
-  """Camera views (indices into Observation's V axis) the method's networks read."""
-  return methods.get(method).views
-
-
 class ResBlock(nnx.Module):
   """Pre-activation residual block: GroupNorm, relu, 3x3 conv, twice."""
 
@@ -207,15 +202,15 @@ class QNetwork(nnx.Module):
   networks see one view, `fuse_views` of its views.
   """
 
-  def __init__(self, method: str, config: NetworkConfig, num_rotations: int, rngs: nnx.Rngs):
+  def __init__(self, method: methods.Method, config: NetworkConfig, num_rotations: int,
+               rngs: nnx.Rngs):
     self.num_rotations = num_rotations
-    spec = methods.get(method)
-    self.views = views_used(method)
-    self.fuse = spec.fuse
+    self.views = method.views
+    self.fuse = method.fuse
     self.streams = (0,) if self.fuse else self.views  # the inputs each FCN reads, by view
-    self.primitives = tuple(prims for prims, _ in spec.fcns)
-    self.fcns = nnx.List([FCN((0,) if self.fuse else views, len(prims), config, rngs)
-                          for prims, views in spec.fcns])
+    self.primitives = tuple(fcn.primitives for fcn in method.fcns)
+    self.fcns = nnx.List([FCN((0,) if self.fuse else fcn.views, len(fcn.primitives), config, rngs)
+                          for fcn in method.fcns])
 
   def __call__(self, color, depth, rotations=None):
     """`color` (B, V, R, R, 3) 0..1, `depth` (B, V, R, R) m; `rotations` (B, K) int rotation
@@ -245,8 +240,7 @@ class QNetwork(nnx.Module):
 
 def build_network(config: NetworkConfig, num_rotations: int, rngs: nnx.Rngs) -> QNetwork:
   """The Q-network of `config.method` with the `config.trunk` backbone."""
-  methods.get(config.method)
-  return QNetwork(config.method, config, num_rotations, rngs)
+  return QNetwork(methods.get(config.method), config, num_rotations, rngs)
 
 
 def executed_q(q_maps, primitive, row, col):

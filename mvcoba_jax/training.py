@@ -14,7 +14,7 @@ import optax
 from flax import nnx, struct
 from jax.sharding import Mesh, PartitionSpec
 
-from mvcoba_jax import agent, networks, perception, task
+from mvcoba_jax import agent, methods, networks, perception, task
 from mvcoba_jax import replay as replay_lib
 from mvcoba_jax.config import Config
 from mvcoba_jax.sim import reserve as reserve_lib
@@ -75,8 +75,8 @@ class Trainer:
     self.config = config
     self.mesh = mesh if mesh is not None and mesh.devices.size > 1 else None
     self.env = Tabletop(config)
-    self.method = config.network.method
-    self.views = networks.views_used(self.method)
+    self.method = methods.get(config.network.method)
+    self.views = self.method.views
     model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
     self.graphdef, _ = nnx.split(model)
     self.optimizer = agent.optimizer(config.train)
@@ -193,7 +193,7 @@ class Trainer:
     eps = jnp.where(epsilon >= 0, epsilon, agent.epsilon_at(state.actions, t))
     q = self.q_maps(state.params, state.obs)
     occupied = agent.surface_height(state.obs.depth, self.views) > t.explore_min_height
-    maps = agent.rule_maps(q, state.obs.depth, self.views, self.method, self.config)
+    maps = agent.rule_maps(q, state.obs.depth, self.method, self.config)
     action, explored = agent.epsilon_greedy(maps, state.changed, occupied, eps, k_act, self.method)
     env_states, obs, out = task.step(self.env, self.views, state.env, state.obs, state.failures,
                                      action, t, self.per_env)

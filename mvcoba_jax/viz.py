@@ -48,6 +48,17 @@ def write_pictures(env: Tabletop, state, out: pathlib.Path, scale: int = 4) -> l
   return paths
 
 
+def save_state(env: Tabletop, state, path: pathlib.Path) -> pathlib.Path:
+  """The heightmaps of every camera view of one environment state as the ONNX example's input
+  (`examples/onnx_infer.py --state`): an npz of `color` (V, R, R, 3) RGB in 0..1 and `depth`
+  (V, R, R) heights in metres, 0 where a view saw nothing."""
+  obs = jax.device_get(jax.jit(lambda s: perception.observe(env, s))(state))
+  path.parent.mkdir(parents=True, exist_ok=True)
+  np.savez_compressed(path, color=np.asarray(obs.color, np.float32),
+                      depth=np.asarray(obs.depth, np.float32))
+  return path
+
+
 def run_strip(trace, run: int, config: config_lib.Config, scale: int = 3) -> np.ndarray:
   """One run as a left-to-right strip of its steps, each the views' colour heightmaps stacked
   top to bottom with the action drawn on them: a push as an arrow along its direction, a grasp

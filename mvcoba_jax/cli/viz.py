@@ -1,9 +1,11 @@
 """Pictures of a case file: each camera's colour and depth image and each view's heightmaps.
 
-  mvcoba-viz CASE [--out viz/] [--settle] [--config ...] [--set ...]
+  mvcoba-viz CASE [--out viz/] [--settle] [--save-state state.npz] [--config ...] [--set ...]
 
 CASE is a scenario file (`.scn` or VPG `.txt`). Without --settle the objects are drawn exactly
-where the file puts them; with it, after the physics has let them come to rest.
+where the file puts them; with it, after the physics has let them come to rest. --save-state
+also writes the heightmaps of every view as the input of `examples/onnx_infer.py --state` (the
+cameras of the config: `--set network.method=mvp` for MVP's four views).
 """
 from __future__ import annotations
 
@@ -15,9 +17,10 @@ import jax
 
 from mvcoba_jax import config as config_lib
 from mvcoba_jax import runtime
+from mvcoba_jax.evaluation import pool_for, suite_config
 from mvcoba_jax.sim.scenarios import ScenarioError, case_to_layout, read_case
 from mvcoba_jax.sim.tabletop import Tabletop
-from mvcoba_jax.viz import write_pictures
+from mvcoba_jax.viz import save_state, write_pictures
 
 
 def main(argv=None) -> int:
@@ -27,12 +30,20 @@ def main(argv=None) -> int:
   parser.add_argument('--settle', action='store_true', help='let the physics settle the case first')
   parser.add_argument('--blocks', default='vpg',
                       help='block table of a VPG-format case: vpg or mvcoba (the MV-COBA authors\')')
+  parser.add_argument('--save-state', type=pathlib.Path, metavar='FILE',
+                      help='also write every view\'s heightmaps as an npz (color, depth): the '
+                           'input of examples/onnx_infer.py --state')
   config_lib.add_arguments(parser)
   args = parser.parse_args(argv)
+  if args.save_state and args.save_state.exists():
+    parser.error(f'--save-state {args.save_state}: exists; remove it or name another file')
+  if args.save_state and args.save_state.suffix != '.npz':
+    parser.error(f'--save-state {args.save_state}: name an .npz file')
   try:
-    env = Tabletop(config_lib.from_arguments(args))
-    scene = env.config.scene
+    config = config_lib.from_arguments(args)
+    scene = config.scene
     case = read_case(args.case, scene.workspace_half, scene.workspace_top, args.blocks)
+    env = Tabletop(suite_config(config, pool_for([case])))  # the slots the case needs
     layout = case_to_layout(case, env)
   except (config_lib.ConfigError, ScenarioError) as e:
     parser.error(str(e))
@@ -40,6 +51,8 @@ def main(argv=None) -> int:
   state = (jax.jit(env.reset_from_case) if args.settle else jax.jit(env.place))(layout)
   for path in write_pictures(env, state, pathlib.Path(args.out)):
     print(path)
+  if args.save_state:
+    print(save_state(env, state, args.save_state))
   return 0
 
 

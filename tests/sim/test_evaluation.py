@@ -8,7 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from mvcoba_jax import agent, evaluation, metrics, perception, video, viz
+from mvcoba_jax import agent, evaluation, methods, metrics, perception, video, viz
 from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.config import resolve
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts
@@ -390,7 +390,7 @@ def test_no_repeat_takes_the_next_best_action_instead_of_a_failed_one(setup):
   q_maps = lambda obs: jnp.broadcast_to(ramp, (obs.depth.shape[0], 2, 1, r, r))
   logs = {}
   for no_repeat in (False, True):
-    policy = evaluation.greedy_policy(q_maps, 'grasp_only', env.config, no_repeat)
+    policy = evaluation.greedy_policy(q_maps, methods.get('grasp_only'), env.config, no_repeat)
     logs[no_repeat] = evaluation.run_logs(evaluation.evaluate(env, policy, (0, 1), layouts,
                                                               keys, 10))
   attempts = env.config.env.max_failures + 1

@@ -14,9 +14,10 @@ import numpy as np
 import pytest
 from flax import nnx
 
-from mvcoba_jax import agent, export, perception, policy
+from mvcoba_jax import agent, export, methods, perception, policy
 from mvcoba_jax.checkpoint import Checkpoints
 from mvcoba_jax.cli import export as export_cli
+from mvcoba_jax.cli import viz as viz_cli
 from mvcoba_jax.config import ConfigError, defaulted, from_dict, resolve, to_dict
 from mvcoba_jax.methods import names as method_names
 from mvcoba_jax.training import Trainer
@@ -152,7 +153,7 @@ def test_onnx_matches_jax_forward_and_action(name, run, parity, states):
   diff = float(np.abs(q_onnx - q_jax).max())
   assert diff < TOLERANCE, f'{name}: max |ONNX - JAX| = {diff:.2e}'
   example = _example()
-  model = {'primitives': {'push': 0, 'grasp': 1}, 'action_rule': export.action_rule('mvcoba')}
+  model = {'primitives': {'push': 0, 'grasp': 1}, 'action_rule': export.action_rule(methods.get('mvcoba'))}
   for changed in (False, True):
     want = jax_action(q_jax, changed, states[name][1], run[0])
     got = example.choose(q_onnx[0], changed, model)
@@ -165,9 +166,9 @@ def test_example_rule_is_the_agents_rule(method):
   """Every method's rule as the example applies it from model.json, on the same Q maps."""
   q = np.asarray(jax.random.normal(jax.random.PRNGKey(method_names().index(method)), (1, 2, 4, 8, 8)))
   example = _example()
-  model = {'primitives': {'push': 0, 'grasp': 1}, 'action_rule': export.action_rule(method)}
+  model = {'primitives': {'push': 0, 'grasp': 1}, 'action_rule': export.action_rule(methods.get(method))}
   for changed in (False, True):
-    action = agent.greedy_actions(jnp.asarray(q), jnp.array([changed]), method)
+    action = agent.greedy_actions(jnp.asarray(q), jnp.array([changed]), methods.get(method))
     got = example.choose(q[0], changed, model)
     assert [got[k] for k in ('primitive', 'rotation', 'row', 'col')] == [
         int(getattr(action, k)[0]) for k in ('primitive', 'rotation', 'row', 'col')]
@@ -195,6 +196,33 @@ def test_example_script_prints_the_jax_action_without_jax(run, exported, parity,
     assert got['primitive_name'] == ('grasp' if changed else 'push')
 
 
+def test_a_state_saved_by_mvcoba_viz_runs_through_the_onnx_example(run, exported, tmp_path):
+  """The docs' two commands end to end: `mvcoba-viz --save-state` writes the heightmaps of a
+  settled case and the example picks from them, without JAX, the action JAX picks."""
+  trainer, _, params = run
+  case = tmp_path / 'case.scn'
+  case.write_text('cube red -0.06 0.04 20\nflat_box blue 0.05 -0.03 0\n')
+  state = tmp_path / 'state.npz'
+  argv = [str(case), '--settle', '--config', TINY, '--out', str(tmp_path / 'viz'),
+          '--save-state', str(state)]
+  assert viz_cli.main(argv) == 0
+  with np.load(state) as saved:
+    color, depth = saved['color'], saved['depth']
+  assert color.shape == (2, 56, 56, 3) and depth.shape == (2, 56, 56)
+  assert 0.04 < depth.max() < 0.06  # the cube's top, seen by both views
+  with pytest.raises(SystemExit):  # an existing file is not overwritten
+    viz_cli.main(argv)
+  done = subprocess.run([sys.executable, '-c', NO_JAX, str(EXAMPLE), '--model',
+                         str(exported[0]['onnx'].parent), '--state', str(state)],
+                        capture_output=True, text=True, cwd=tmp_path, check=False)
+  assert done.returncode == 0, done.stderr
+  got = json.loads(done.stdout.strip().splitlines()[-1])
+  q = nnx.merge(trainer.graphdef, params)(jnp.asarray(color[None]), jnp.asarray(depth[None]))
+  want = jax_action(np.asarray(q), True, jnp.asarray(depth[None]), trainer)
+  assert [got[k] for k in ('primitive', 'rotation', 'row', 'col')] == [
+      want[k] for k in ('primitive', 'rotation', 'row', 'col')]
+
+
 @pytest.mark.parametrize('method', ['mvp', 'cpg'])
 def test_baselines_export_round_trip_with_onnx_parity(method, tmp_path):
   """MVP (four viewpoints fused in the graph) and CPG (a second output: the suppressed scores
@@ -214,7 +242,7 @@ def test_baselines_export_round_trip_with_onnx_parity(method, tmp_path):
   color = jax.random.uniform(kc, (1, views, side, side, 3))
   depth = 0.1 * jax.random.uniform(kd, (1, views, side, side)) ** 4
   q = jax.jit(lambda c, d: model(c, d))(color, depth)
-  maps = agent.rule_maps(q, depth, trainer.views, method, config)
+  maps = agent.rule_maps(q, depth, trainer.method, config)
   session = ort.InferenceSession(str(paths['onnx']), providers=['CPUExecutionProvider'])
   names = [o['name'] for o in model_json['onnx']['outputs']]
   assert names == (['q', 'score'] if method == 'cpg' else ['q'])
@@ -225,7 +253,7 @@ def test_baselines_export_round_trip_with_onnx_parity(method, tmp_path):
   np.testing.assert_allclose(rule_maps, np.asarray(maps), rtol=1e-5, atol=TOLERANCE)
   example = _example()
   for changed in (False, True):
-    want = agent.greedy_actions(maps, jnp.array([changed]), method)
+    want = agent.greedy_actions(maps, jnp.array([changed]), trainer.method)
     chosen = example.choose(rule_maps[0], changed, model_json)
     assert [chosen[k] for k in ('primitive', 'rotation', 'row', 'col')] == [
         int(getattr(want, k)[0]) for k in ('primitive', 'rotation', 'row', 'col')]
@@ -257,13 +285,21 @@ def test_export_folder_of_another_network_is_a_clear_error(exported, tmp_path):
   assert f'{first}: shape' in message and f'{last}: missing' in message
 
 
-@pytest.mark.parametrize('folder', sorted((ROOT / 'pretrained').iterdir()), ids=lambda p: p.name)
+@pytest.mark.parametrize('folder', sorted(p for p in (ROOT / 'pretrained').iterdir() if p.is_dir()),
+                         ids=lambda p: p.name)
 def test_shipped_pretrained_policy_fits_the_current_network(folder):
   """A change of the network that would leave a shipped policy unloadable fails here: train and
   export it again (README, Pretrained policy)."""
   config, model, step = policy.load(folder)
   assert config.network.method == folder.name and step > 0
   assert all(np.isfinite(a).all() for a in policy.flat_params(model).values())
+
+
+def test_shipped_example_state_is_an_input_of_the_shipped_policy():
+  """pretrained/example-state.npz is what the docs run examples/onnx_infer.py on."""
+  model = json.loads((ROOT / 'pretrained' / 'mvcoba' / 'model.json').read_text())
+  color, depth = _example().load_state(ROOT / 'pretrained' / 'example-state.npz', model)
+  assert 0.0 <= color.min() and color.max() <= 1.0 and 0.02 < depth.max() < 0.2
 
 
 def test_missing_work_directory_is_a_clear_error(tmp_path):

@@ -29,3 +29,13 @@ def test_every_path_the_docs_name_exists():
   missing = [f'{d.relative_to(ROOT)}:{n}: {p.relative_to(ROOT) if p.is_relative_to(ROOT) else p}'
              for d in _documents() for n, p in _named(d) if not p.exists()]
   assert not missing, '\n'.join(missing)
+
+
+def test_the_readme_results_are_the_reproductions_tables():
+  """The README's results tables are copied from mvcoba-reproduce's comparison.md, row for row
+  and in order: a new reproduction is not half taken over."""
+  comparison = ROOT / 'docs' / 'results' / 'reproduction' / 'comparison.md'
+  rows = [line for line in comparison.read_text().splitlines() if line.startswith('|')]
+  readme = [line for line in (ROOT / 'README.md').read_text().splitlines() if line.startswith('|')]
+  at = readme.index(rows[0]) if rows[0] in readme else -1
+  assert rows and readme[at:at + len(rows)] == rows, 'README.md results differ from ' + str(comparison)

@@ -6,22 +6,22 @@ import pytest
 from flax import nnx
 
 from mvcoba_jax import agent, export, methods, networks
-from mvcoba_jax.config import NetworkConfig
+from mvcoba_jax.config import NetworkConfig, resolve
 from mvcoba_jax.sim.primitives import GRASP, PUSH
 
 
 @pytest.fixture
 def toy():
   """A push-only method that sees camera 2 and picks by max-Q, registered for one test."""
-  method = methods.register(methods.Method('toy_push_cam2', fcns=(((PUSH,), (1,)),),
-                                           rule='max_q'))
+  method = methods.register(methods.Method('toy_push_cam2', fcns=(methods.Fcn((PUSH,), (1,)),),
+                                           rule=methods.MAX_Q))
   yield method.name
   methods.unregister(method.name)
 
 
 def test_a_registered_method_is_built_acts_and_exports(toy):
   assert toy in methods.names()
-  assert networks.views_used(toy) == (1,)
+  assert methods.get(toy).views == (1,)
   config = NetworkConfig(method=toy, features=(8, 16), groups=4)
   net = networks.build_network(config, 4, nnx.Rngs(0))
   color = jax.random.uniform(jax.random.PRNGKey(1), (3, 2, 16, 16, 3))
@@ -31,15 +31,31 @@ def test_a_registered_method_is_built_acts_and_exports(toy):
   assert (np.asarray(q[:, GRASP]) == networks.NO_ACTION).all()
   # Camera 1 is not an input: changing it changes nothing.
   np.testing.assert_array_equal(np.asarray(net(color.at[:, 0].set(0.0), depth)), np.asarray(q))
-  action = agent.greedy_actions(q, jnp.ones(3, bool), toy)
+  action = agent.greedy_actions(q, jnp.ones(3, bool), methods.get(toy))
   assert (np.asarray(action.primitive) == PUSH).all()  # max-Q never picks a missing primitive
-  assert export.action_rule(toy)['name'] == 'max_q'
+  assert export.action_rule(methods.get(toy))['name'] == 'max_q'
+
+
+def test_a_new_rule_is_one_object_the_agent_asks():
+  """A rule that always pushes and whose target looks at both primitives: acting, the target's
+  max and model.json follow it without a line elsewhere."""
+  push = methods.Rule('push', 'always push', lambda changed, best: jnp.zeros_like(changed, jnp.int32),
+                      future_over_both=True, explores_primitive=False)
+  method = methods.Method('toy_pusher', fcns=(methods.Fcn((PUSH, GRASP), (0,)),), rule=push)
+  q = jnp.zeros((2, 2, 1, 4, 4)).at[:, GRASP, 0, 1, 2].set(5.0).at[:, PUSH, 0, 3, 0].set(1.0)
+  action = agent.greedy_actions(q, jnp.array([True, False]), method)
+  assert np.asarray(action.primitive).tolist() == [PUSH, PUSH]
+  assert np.asarray(action.row).tolist() == [3, 3]
+  train = resolve('default').train
+  np.testing.assert_allclose(agent.future_value(q, jnp.array([True, False]), method, train), 5.0)
+  assert export.action_rule(method)['primitive'] == 'always push'
 
 
 def test_a_malformed_or_unknown_method_is_refused():
-  with pytest.raises(ValueError, match="rule 'sometimes' is not one of change, max_q, grasp"):
-    methods.Method('bad', fcns=(((GRASP,), (0,)),), rule='sometimes')
+  with pytest.raises(ValueError, match="its rule must be a methods.Rule .* got 'sometimes'"):
+    methods.Method('bad', fcns=(methods.Fcn((GRASP,), (0,)),), rule='sometimes')
   with pytest.raises(ValueError, match='score each primitive at most once'):
-    methods.Method('bad', fcns=(((GRASP,), (0,)), ((GRASP,), (1,))), rule='grasp')
+    methods.Method('bad', fcns=(methods.Fcn((GRASP,), (0,)), methods.Fcn((GRASP,), (1,))),
+                   rule=methods.ALWAYS_GRASP)
   with pytest.raises(ValueError, match="unknown network method 'nope'; allowed: mvcoba"):
-    networks.views_used('nope')
+    methods.get('nope')

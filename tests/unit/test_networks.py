@@ -9,7 +9,7 @@ import optax
 import pytest
 from flax import nnx
 
-from mvcoba_jax import networks
+from mvcoba_jax import methods, networks
 from mvcoba_jax.config import NetworkConfig
 from mvcoba_jax.methods import names as method_names
 from mvcoba_jax.sim import primitives
@@ -63,7 +63,7 @@ def test_each_primitive_reads_only_its_camera(method_maps):
   expected = {'mvcoba': (True, True), 'mvcoba_2fcn': (False, True), 'vpg': (False, False),
               'grasp_only': (False, False), 'mvp': (False, True), 'cpg': (False, False)}[method]
   assert (changed[networks.PUSH], changed[networks.GRASP]) == expected
-  assert networks.views_used(method) == {'vpg': (0,), 'grasp_only': (0,), 'cpg': (0,),
+  assert methods.get(method).views == {'vpg': (0,), 'grasp_only': (0,), 'cpg': (0,),
                                          'mvp': (0, 1, 2, 3)}.get(method, (0, 1))
 
 

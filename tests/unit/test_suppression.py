@@ -4,7 +4,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from mvcoba_jax import agent, networks, suppression
+from mvcoba_jax import agent, methods, networks, suppression
 from mvcoba_jax.config import resolve
 from mvcoba_jax.sim.primitives import GRASP, PUSH
 
@@ -47,13 +47,13 @@ def test_the_rule_never_picks_a_suppressed_action(seed):
   q = jax.random.normal(jax.random.PRNGKey(seed), (3, 2, K, SIDE, SIDE))
   depth = jnp.asarray(heights)[:, None]  # one view
   config = resolve('default')
-  maps = agent.rule_maps(q, depth, (0,), 'cpg', config)
-  action = agent.greedy_actions(maps, jnp.ones(3, bool), 'cpg')
+  maps = agent.rule_maps(q, depth, methods.get('cpg'), config)
+  action = agent.greedy_actions(maps, jnp.ones(3, bool), methods.get('cpg'))
   f = np.asarray(factors(jnp.asarray(heights)))
   picked = f[np.arange(3), np.asarray(action.primitive), np.asarray(action.rotation),
              np.asarray(action.row), np.asarray(action.col)]
   assert (picked > 0).all(), picked
-  raw = agent.greedy_actions(q, jnp.ones(3, bool), 'vpg')
+  raw = agent.greedy_actions(q, jnp.ones(3, bool), methods.get('vpg'))
   raw_f = f[np.arange(3), np.asarray(raw.primitive), np.asarray(raw.rotation),
             np.asarray(raw.row), np.asarray(raw.col)]
   changed = np.asarray(raw.row) != np.asarray(action.row)
@@ -63,6 +63,6 @@ def test_the_rule_never_picks_a_suppressed_action(seed):
 def test_with_nothing_allowed_the_raw_maps_decide():
   q = jax.random.normal(jax.random.PRNGKey(0), (1, 2, K, SIDE, SIDE))
   empty = jnp.zeros((1, 1, SIDE, SIDE))
-  maps = agent.rule_maps(q, empty, (0,), 'cpg', resolve('default'))
+  maps = agent.rule_maps(q, empty, methods.get('cpg'), resolve('default'))
   np.testing.assert_array_equal(np.asarray(maps), np.asarray(q))
   assert not np.any(np.asarray(maps) == networks.NO_ACTION)
