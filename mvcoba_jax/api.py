@@ -30,7 +30,8 @@ from mvcoba_jax.policy import PolicyError, fingerprint
 from mvcoba_jax.policy import load as load_policy
 from mvcoba_jax.run_log import (action_records, plot_curves, plot_sweep, read_records, summary,
                                 write_records)
-from mvcoba_jax.sim.scenarios import ScenarioError, case_to_layout, read_case, stack_layouts
+from mvcoba_jax.sim.scenarios import (MAX_FIT_BOUND, ScenarioError, case_to_layout, read_case,
+                                      stack_layouts)
 from mvcoba_jax.sim.shapes import BLOCK_TABLES
 from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites import suite_files
@@ -309,13 +310,15 @@ def block_tables(given, suites: list[str]) -> dict[str, str]:
 def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, runs: int = 5,
              max_actions: int = 60, seed: int = 0, protocol: str = 'frozen',
              config: str | None = None, overrides=(), blocks=(), allow_bad_cases: bool = False,
-             out='eval_out', resume: bool = False, overwrite: bool = False,
+             fit_overlaps: float | None = None, out='eval_out', resume: bool = False, overwrite: bool = False,
              save_visuals: bool = False, video: bool = False, progress: bool = True) -> dict:
   """Evaluates trained policies (work directories or exports) and a `baseline` on suites (names
   of `suites.SUITES`, `all`, or paths of case files and folders): every case x `runs` runs of a
   suite in one compiled lockstep loop, each run capped at `max_actions`. `protocol` 'frozen'
   acts greedily with the trained network, 'online' lets every run go on learning from its own
-  actions, 'no-repeat' is frozen but never repeats a failed action of its run.
+  actions, 'no-repeat' is frozen but never repeats a failed action of its run. `fit_overlaps`
+  (a bound in m) moves objects of a case that interpenetrate as the file places them apart
+  first (`sim.scenarios.fit_overlaps`), refusing a case where one would move farther.
 
   Returns the report written to `out` (results.json, results.md, rewritten after each row):
   suite -> row label -> per-case metrics, their means, each run's counts and the settings the
@@ -332,6 +335,8 @@ def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, ru
   if resume and overwrite:
     raise EvaluationError('resume keeps the rows of the output folder and overwrite replaces '
                           'them: give one')
+  if fit_overlaps is not None and not 0 < fit_overlaps <= MAX_FIT_BOUND:
+    raise EvaluationError(f'fit_overlaps {fit_overlaps!r}: a bound in m in (0, {MAX_FIT_BOUND}]')
   say = print if progress else (lambda *a, **k: None)
   checkpoints = [str(c) for c in checkpoints]
   try:  # everything that can be wrong with the input fails here, before any compile
@@ -341,10 +346,25 @@ def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, ru
     base = config_lib.resolve(config, overrides)
     bounds = base.scene.workspace_half, base.scene.workspace_top
     tables = block_tables(blocks, list(files_of))
-    cases_of = {name: [read_case(f, *bounds, blocks=tables.get(name, tables.get('', 'vpg')))
-                       for f in files]
+    table_of = {name: tables.get(name, tables.get('', 'vpg')) for name in files_of}
+    cases_of = {name: [read_case(f, *bounds, blocks=table_of[name]) for f in files]
                 for name, files in files_of.items()}
-    bad = [m for cases in cases_of.values() for m in evaluation.case_problems(cases, base)]
+    moves_of = {}
+    if fit_overlaps is not None:
+      for name, cases in cases_of.items():
+        cases_of[name], moves = evaluation.fitted(cases, base, fit_overlaps)
+        moves_of[name] = {c.name: {'max_mm': round(1000 * max(m), 1),
+                                   'mean_mm': round(1000 * sum(m) / len(m), 2),
+                                   'lines_mm': {str(o.line): round(1000 * d, 1)
+                                                for o, d in zip(c.objects, m) if d}}
+                          for c, m in zip(cases, moves)}
+    # Fitted objects fall onto what they were lifted from: their neighbours may shift as far.
+    settle_move = max(evaluation.SETTLE_MOVE, fit_overlaps or 0.0)
+    bad = [m for cases in cases_of.values()
+           for m in evaluation.case_problems(cases, base, settle_move)]
+    hints = [] if not bad or allow_bad_cases else [
+        f'{name}: {hint}' for name, files in files_of.items()
+        if (hint := evaluation.other_block_table(files, base, table_of[name]))]
     loaded = [load_policy(path) for path in checkpoints]
     trained = [(config_lib.trained_as(c), c.seed) for c, _, _ in loaded] + [(None, None)]
     sources = [(config_lib.evaluated(c, overrides), model, step) for c, model, step in loaded]
@@ -359,7 +379,10 @@ def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, ru
         'params': None if isinstance(source, str) else fingerprint(source[1]),
         'cases': [c.name for c in cases], 'runs': runs, 'max_actions': max_actions,
         'seed': seed, 'set': list(overrides), 'training': training[0],
-        'training_seed': training[1], 'protocol': protocol}
+        'training_seed': training[1], 'protocol': protocol,
+        'listed_objects': {c.name: len(c.objects) for c in cases},
+        'fit_overlaps_mm': None if fit_overlaps is None else 1000 * fit_overlaps,
+        'fitted_mm': moves_of.get(suite)}
         for suite, cases in cases_of.items()
         for label, source, path, training in zip(labels, sources, checkpoints + [None],
                                                  trained)}
@@ -368,7 +391,14 @@ def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, ru
           folders.FolderError) as e:
     raise EvaluationError(str(e)) from None
   if bad and not allow_bad_cases:
-    raise EvaluationError('\n  '.join(bad) + '\n(--allow-bad-cases evaluates them anyway)')
+    raise EvaluationError('\n  '.join([*hints, *bad]) + '\n(--fit-overlaps moves objects that '
+                          'interpenetrate apart; --allow-bad-cases evaluates the cases as they are)')
+  for suite, moves in moves_of.items():
+    moved = {case: m for case, m in moves.items() if m['lines_mm']}
+    say(f'{suite}: --fit-overlaps moved objects in {len(moved)} of {len(moves)} cases' + ''.join(
+        f'\n  {case}: max {m["max_mm"]:.1f} mm, mean {m["mean_mm"]:.1f} mm over its objects '
+        f'(lines {", ".join(f"{line}: {d:.1f}" for line, d in m["lines_mm"].items())} mm)'
+        for case, m in moved.items()))
   for suite, cases in cases_of.items():
     parked = sum(len(c.parked_lines) for c in cases)
     if parked:
@@ -451,10 +481,11 @@ def _row(suite, cases, label, source, base, protocol, runs, max_actions, seed, o
     (folder / 'losses.json').write_text(json.dumps(lost, indent=1))
     say(f'  visuals in {folder}; {report_lib.loss_summary(lost)}', flush=True)
   by_case = {name: logs[i * runs:(i + 1) * runs] for i, name in enumerate(names)}
-  uneven = report_lib.uneven_starts(by_case)
-  if uneven:
-    say(f'  objects left while these cases settled, so their runs start with different numbers '
-        f'in play: {uneven}', flush=True)
+  every, short = report_lib.starts(by_case, {c.name: len(c.objects) for c in cases})
+  say(f'  objects in play at the start of the runs, of the file\'s: {every}', flush=True)
+  if short:
+    say(f'  these cases began with fewer objects than their files list (objects left the '
+        f'workspace while they settled): {short}', flush=True)
   return report_lib.scored(by_case, time.perf_counter() - start)
 
 

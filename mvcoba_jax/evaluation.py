@@ -28,12 +28,16 @@ from mvcoba_jax.config import Config
 from mvcoba_jax.metrics import RunLog
 from mvcoba_jax.sim.geometry import pixel_to_world, quat_mul, yaw_quat
 from mvcoba_jax.sim.scenarios import (
+  ScenarioError,
   case_slots,
   case_to_layout,
+  fit_overlaps,
   half_height,
   overlaps,
+  read_case,
   stack_layouts,
 )
+from mvcoba_jax.sim.shapes import BLOCK_TABLES
 from mvcoba_jax.sim.tabletop import EnvState, Layout, Tabletop, where_envs
 
 POSITION_NOISE = 0.002  # m, per axis, on each object's start position
@@ -514,6 +518,51 @@ def case_problems(cases, config, settle_move: float = SETTLE_MOVE) -> list[str]:
           problems[i].append(f'{where}, listed on the table, moved '
                              f'{100 * moved[row, slot]:.1f} cm while the case settled')
   return [m for p in problems for m in p]
+
+
+def fitted(cases, config, bound: float):
+  """(`cases` each made physically valid by `fit_overlaps` in the scene a suite of them gets,
+  each case's objects' moves in m); ScenarioError names every object that would move more than
+  `bound`."""
+  env = Tabletop(suite_config(config, pool_for(cases)))
+  done, moves, stuck = [], [], []
+  for case in cases:
+    try:
+      fit, moved = fit_overlaps(case, env, bound)
+    except ScenarioError as e:
+      stuck.append(str(e))
+      continue
+    done.append(fit)
+    moves.append(moved)
+  if stuck:
+    raise ScenarioError('\n'.join(stuck))
+  return done, moves
+
+
+def other_block_table(files, config, blocks: str) -> str:
+  """A hint for VPG-format case files that overlap: when another block table reads them with
+  fewer than half the overlapping pairs, the likely cause is a table that does not match the
+  files, and the line says which to try; else empty."""
+  files = [f for f in files if f.suffix == '.txt']
+  if not files:
+    return ''
+  half, top = config.scene.workspace_half, config.scene.workspace_top
+
+  def count(table):
+    try:
+      cases = [read_case(f, half, top, table) for f in files]
+    except ScenarioError:  # a mesh the table does not name
+      return None
+    env = Tabletop(suite_config(config, pool_for(cases)))
+    return sum(len(overlaps(case, env)) for case in cases)
+
+  here = count(blocks)
+  others = {t: n for t in BLOCK_TABLES if t != blocks and (n := count(t)) is not None}
+  best = min(others, key=others.get, default=None)
+  if not here or best is None or others[best] * 2 > here:
+    return ''
+  return (f'these files overlap in {here} pairs read with --blocks {blocks} and in '
+          f'{others[best]} with --blocks {best}: they are likely {best}\'s block set')
 
 
 def source_name(method_source) -> str:

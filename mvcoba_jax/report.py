@@ -170,11 +170,19 @@ def scored(by_case: dict[str, list[metrics.RunLog]], wall_s: float) -> dict:
                    for name, logs in by_case.items()}}
 
 
-def uneven_starts(by_case: dict[str, list[metrics.RunLog]]) -> str:
-  """`case (n1, n2, ...)` for each case whose runs began with different numbers of objects in
-  play (objects left while it settled, in some runs only); empty when every case is even."""
-  return ', '.join(f'{name} ({", ".join(str(log.objects) for log in logs)})'
-                   for name, logs in by_case.items() if len({log.objects for log in logs}) > 1)
+def starts(by_case: dict[str, list[metrics.RunLog]], listed: dict[str, int]) -> tuple[str, str]:
+  """(every case as `name k/n`, the cases among them that began short): the objects in play at
+  the start of the case's runs (one figure when every run began alike, else each run's) of the
+  n its file lists. Objects that leave while a case settles are not in play."""
+  parts, short = [], []
+  for name, logs in by_case.items():
+    counts = [log.objects for log in logs]
+    text = f'{name} {counts[0] if len(set(counts)) == 1 else ",".join(map(str, counts))}/' \
+           f'{listed[name]}'
+    parts.append(text)
+    if min(counts) < listed[name]:
+      short.append(text)
+  return ', '.join(parts), ', '.join(short)
 
 
 def loss_summary(lost: list[dict]) -> str:

@@ -28,6 +28,7 @@ import sys
 from mvcoba_jax import api, video
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.cli import fail
+from mvcoba_jax.sim.scenarios import FIT_BOUND, MAX_FIT_BOUND
 from mvcoba_jax.suites import SUITES
 
 
@@ -71,6 +72,13 @@ def main(argv=None) -> int:
   parser.add_argument('--blocks', nargs='+', default=[], metavar='[SUITE=]TABLE',
                       help='block table for VPG-format (.txt) case files: vpg (default), mvcoba '
                            '(the MV-COBA authors\' block set); SUITE=TABLE for one suite only')
+  parser.add_argument('--fit-overlaps', type=float, nargs='?', const=1000 * FIT_BOUND,
+                      metavar='MM',
+                      help='make cases whose objects interpenetrate as placed valid first: in '
+                           'file order, each object moved by the least distance (up, or sideways '
+                           'away from what it touches) that clears the objects before it; every '
+                           'move is reported, and a case where one would move more than MM '
+                           f'(default {1000 * FIT_BOUND:.0f}) is refused')
   parser.add_argument('--allow-bad-cases', '--allow-overlaps', action='store_true',
                       help='evaluate cases that fail the load check (refused otherwise): objects '
                            'that interpenetrate as placed, leave the workspace as the case '
@@ -99,11 +107,16 @@ def main(argv=None) -> int:
   if args.online and args.no_repeat:
     parser.error('--no-repeat is a frozen protocol; give it or --online')
   protocol = 'online' if args.online else 'no-repeat' if args.no_repeat else 'frozen'
+  if args.fit_overlaps is not None and not 0 < args.fit_overlaps <= 1000 * MAX_FIT_BOUND:
+    parser.error(f'--fit-overlaps {args.fit_overlaps:g}: a bound in mm in (0, '
+                 f'{1000 * MAX_FIT_BOUND:.0f}]')
   try:
     api.evaluate(args.checkpoint, args.suite, baseline=args.baseline, runs=args.runs,
                  max_actions=args.max_actions, seed=args.seed, protocol=protocol,
                  config=args.config, overrides=args.overrides, blocks=args.blocks,
-                 allow_bad_cases=args.allow_bad_cases, out=args.out, resume=args.resume,
+                 allow_bad_cases=args.allow_bad_cases,
+                 fit_overlaps=None if args.fit_overlaps is None else args.fit_overlaps / 1000,
+                 out=args.out, resume=args.resume,
                  overwrite=args.overwrite, save_visuals=args.save_visuals, video=args.video)
   except api.EvaluationError as e:
     return fail(e)

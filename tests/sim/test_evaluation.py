@@ -133,9 +133,32 @@ def test_overlapping_case_is_refused_before_compiling_naming_both_lines(tmp_path
   assert eval_cli.main(args) == 2
   err = capsys.readouterr().err
   assert err.startswith('error: ') and f'{grid}:1 and line 2' in err and '--allow-bad-cases' in err
+  assert 'they are likely mvcoba\'s block set' in err.splitlines()[0]  # the cause, first
   assert not (tmp_path / 'out').exists()
   assert eval_cli.main(args + ['--blocks', 'lego']) == 2
   assert "--blocks 'lego': expected [SUITE=]TABLE with TABLE one of vpg, mvcoba" in capsys.readouterr().err
+
+
+def test_fit_overlaps_evaluates_an_overlapping_case_reporting_moves_and_starts(tmp_path, capsys):
+  """A cube placed 6 mm into its neighbour: refused as it is, evaluated with --fit-overlaps,
+  which reports the move; every run starts with the file's objects in play."""
+  case = tmp_path / 'nudge.scn'
+  case.write_text('cube red 0.0 0.0 0\ncube blue 0.044 0.0 0\n')
+  args = ['--baseline', 'heuristic', '--suite', str(case), '--config', 'tiny', '--runs', '2',
+          '--max-actions', '1', '--out', str(tmp_path / 'out')]
+  assert eval_cli.main(args) == 2
+  assert '--fit-overlaps moves objects' in capsys.readouterr().err
+  with pytest.raises(SystemExit):
+    eval_cli.main(args + ['--fit-overlaps', '0'])
+  assert eval_cli.main(args + ['--fit-overlaps']) == 0
+  out = capsys.readouterr().out
+  assert 'moved objects in 1 of 1 cases' in out and '(lines 2: 3.0 mm)' in out
+  assert 'objects in play at the start of the runs, of the file\'s: nudge 2/2' in out
+  settings = json.loads((tmp_path / 'out' / 'results.json').read_text())[str(case)][
+      'baseline:heuristic']['settings']
+  assert settings['fitted_mm'] == {'nudge': {'max_mm': 3.0, 'mean_mm': 1.5,
+                                             'lines_mm': {'2': 3.0}}}
+  assert settings['listed_objects'] == {'nudge': 2} and settings['fit_overlaps_mm'] == 70.0
 
 
 def test_case_that_loses_an_object_while_settling_is_refused_naming_the_line(tmp_path, capsys):

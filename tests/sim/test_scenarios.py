@@ -348,3 +348,50 @@ def test_shipped_cases_pass_the_load_check():
   for suite in ('random', 'ordered', 'occluded', 'isolated', 'vpg'):
     cases = [read_case(f) for f in suite_files([suite])[suite]]
     assert case_problems(cases, resolve('default')) == [], suite
+
+
+# ------------------------------------------------------------------------------ fitting overlaps
+def test_fit_overlaps_lifts_a_sunk_object_and_nudges_a_side_by_side_one(tmp_path):
+  """Overlaps of known depth: a cube sunk 8 mm into the cube below is lifted, a cube placed 6 mm
+  into its neighbour is moved sideways, each by the least distance that leaves no more than the
+  load check's tolerance; objects listed before them do not move."""
+  from mvcoba_jax.sim.scenarios import OVERLAP_TOLERANCE, fit_overlaps, overlaps
+  path = tmp_path / 'overlapping.scn'
+  path.write_text('cube red 0.0 0.0 0\n'
+                  'cube blue 0.0 0.0 0 0.068\n'        # on top would be z = 0.076
+                  'cube green 0.1 0.0 0\n'
+                  'cube yellow 0.144 0.0 0\n')         # apart would be x >= 0.150
+  case = read_case(path)
+  env = Tabletop(suite_config(resolve('default'), pool_for([case])))
+  assert len(overlaps(case, env)) == 2
+  fitted, moves = fit_overlaps(case, env)
+  lift, nudge = 0.008 - OVERLAP_TOLERANCE, 0.006 - OVERLAP_TOLERANCE
+  np.testing.assert_allclose(moves, [0.0, lift, 0.0, nudge], atol=2e-4)
+  before, after = (np.array([o.pos for o in c.objects]) for c in (case, fitted))
+  np.testing.assert_allclose(after - before, [[0, 0, 0], [0, 0, moves[1]], [0, 0, 0],
+                                              [moves[3], 0, 0]], atol=2e-4)
+  assert overlaps(fitted, env) == [] and case_problems([fitted], resolve('default')) == []
+  with pytest.raises(ScenarioError, match=r'overlapping.scn:2: the cube would move more than 4 mm'):
+    fit_overlaps(case, env, bound=0.004)
+
+
+def test_fit_overlaps_leaves_a_valid_case_as_it_is(public_cases):
+  from mvcoba_jax.sim.scenarios import fit_overlaps
+  env = Tabletop(suite_config(resolve('default'), pool_for(public_cases)))
+  for case in public_cases[:3]:
+    assert fit_overlaps(case, env) == (case, (0.0,) * len(case.objects))
+
+
+def test_overlaps_of_another_block_table_are_named_as_its(tmp_path):
+  """A VPG-format file written with the MV-COBA authors' mesh numbers (0.obj an octagon 25 mm
+  thick) read with VPG's (0.obj a 93 mm prism): the load check says which table fits."""
+  from mvcoba_jax.evaluation import other_block_table
+  lines = [f'0.obj 0.5 0.5 0.5 {-0.62 + 0.032 * i:.3f} 0.0 0.0313 0.0 0.0 0.0' for i in range(4)]
+  path = tmp_path / 'authors-numbering.txt'
+  path.write_text('\n'.join(lines) + '\n')
+  config = resolve('default')
+  assert case_problems([read_case(path, blocks='mvcoba')], config) == []
+  assert case_problems([read_case(path, blocks='vpg')], config)
+  hint = other_block_table([path], config, 'vpg')
+  assert '--blocks vpg' in hint and 'likely mvcoba' in hint
+  assert other_block_table([path], config, 'mvcoba') == ''

@@ -49,12 +49,14 @@ def test_report_gives_intervals_for_methods_evaluated_from_several_seeds():
   assert text.startswith('### ordered: over training seeds') and '| mvcoba | 2 | 75.5 [' in text
 
 
-def test_uneven_starts_name_the_cases_whose_runs_began_differently():
+def test_starts_give_every_case_its_objects_in_play_beside_its_files_count():
   from mvcoba_jax.metrics import RunLog
   log = lambda objects: RunLog(actions=5, grasp_attempts=5, grasp_successes=4, objects=objects,
                                picked=4, lost=0, completed=False)
-  assert report.uneven_starts({'a': [log(6), log(6)], 'b': [log(31), log(32)]}) == 'b (31, 32)'
-  assert report.uneven_starts({'a': [log(6), log(6)]}) == ''
+  assert report.starts({'a': [log(6), log(6)], 'b': [log(31), log(32)]}, {'a': 6, 'b': 32}) == (
+      'a 6/6, b 31,32/32', 'b 31,32/32')
+  assert report.starts({'a': [log(6), log(6)]}, {'a': 6}) == ('a 6/6', '')
+  assert report.starts({'a': [log(5), log(5)]}, {'a': 6}) == ('a 5/6', 'a 5/6')
 
 
 def test_resumed_evaluation_keeps_only_rows_with_the_same_settings(tmp_path):
