@@ -33,12 +33,13 @@ from mvcoba_jax.policy import load  # noqa: E402
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
 from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 from mvcoba_jax.suites import suite_files  # noqa: E402
+from mvcoba_jax.suites import cases as suite_cases  # noqa: E402
 
 
 def step_cost(suite: str, repeats: int) -> dict:
   cases = [read_case(f) for f in suite_files([suite])[suite]]
   config = resolve(None)
-  env = Tabletop(evaluation.suite_config(config, evaluation.pool_for(cases)))
+  env = Tabletop(suite_cases.suite_config(config, suite_cases.pool_for(cases)))
   n = len(cases)
   layouts = stack_layouts([case_to_layout(c, env) for c in cases])
   states, _ = jax.jit(lambda l, k: evaluation.start(env, l, k))(
@@ -69,7 +70,7 @@ def whole_suite(suite: str, checkpoint: str, runs: int) -> dict:
   """Wall time of a suite's evaluation kept in one batch, and moving to smaller batches."""
   cases = [read_case(f) for f in suite_files([suite])[suite]]
   source = load(checkpoint)
-  env = Tabletop(evaluation.suite_config(source[0], evaluation.pool_for(cases)))
+  env = Tabletop(suite_cases.suite_config(source[0], suite_cases.pool_for(cases)))
   policy, views = evaluation.make_policy(source, env.config)
   layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
   keys = jax.random.split(jax.random.PRNGKey(0), len(cases) * runs)

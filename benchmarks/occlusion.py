@@ -15,9 +15,9 @@ import json
 
 from mvcoba_jax import runtime
 from mvcoba_jax.config import resolve
-from mvcoba_jax.occlusion import visibility
 from mvcoba_jax.sim.scenarios import read_case
 from mvcoba_jax.suites import suite_files
+from mvcoba_jax.suites.visibility import visibility
 
 
 def main():

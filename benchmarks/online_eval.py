@@ -25,11 +25,12 @@ from mvcoba_jax.policy import load  # noqa: E402
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
 from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 from mvcoba_jax.suites import suite_files  # noqa: E402
+from mvcoba_jax.suites import cases as suite_cases  # noqa: E402
 
 
 def suite_costs(suite: str, source, runs: int) -> dict:
   cases = [read_case(f) for f in suite_files([suite])[suite]]
-  env = Tabletop(evaluation.suite_config(source[0], evaluation.pool_for(cases)))
+  env = Tabletop(suite_cases.suite_config(source[0], suite_cases.pool_for(cases)))
   layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
   keys = jax.random.split(jax.random.PRNGKey(0), len(cases) * runs)
   row = {'suite': suite, 'runs': len(cases) * runs}

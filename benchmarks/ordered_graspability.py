@@ -23,15 +23,13 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 from mvcoba_jax import config as config_lib  # noqa: E402
-from mvcoba_jax import (
-  evaluation,  # noqa: E402
-  runtime,  # noqa: E402
-)
+from mvcoba_jax import runtime  # noqa: E402
 from mvcoba_jax.sim import shapes  # noqa: E402
 from mvcoba_jax.sim.primitives import GRASP, Action  # noqa: E402
 from mvcoba_jax.sim.scenarios import case_slots, case_to_layout, read_case  # noqa: E402
 from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 from mvcoba_jax.suites import suite_files  # noqa: E402
+from mvcoba_jax.suites import cases as suite_cases  # noqa: E402
 
 PACKED = 0.06  # an object with a neighbour centre this close is packed; others are isolated
 
@@ -39,7 +37,7 @@ PACKED = 0.06  # an object with a neighbour centre this close is packed; others 
 def lift_table(path, base, rotations: int):
   """(case, (objects, rotations) bool: grasp at rotation k lifted the object) for one case file."""
   case = read_case(path)
-  env = Tabletop(evaluation.suite_config(base, evaluation.pool_for([case])))
+  env = Tabletop(suite_cases.suite_config(base, suite_cases.pool_for([case])))
   n = len(case.objects)
   start = jax.jit(env.reset_from_case)(case_to_layout(case, env))
   batch = jax.tree.map(lambda a: jnp.broadcast_to(a, (n * rotations, *a.shape)), start)

@@ -1,7 +1,7 @@
 """Physics cost of each evaluation suite's scene, on the native and the MJX backend.
 
 `mvcoba-eval` builds one scene per suite: the object-slot pool that holds every case, with contact
-limits that grow with it (`evaluation.suite_config`). This times one scripted grasp (the full
+limits that grow with it (`suite_cases.suite_config`). This times one scripted grasp (the full
 primitive) from each suite's largest case in that scene, on both backends from the same settled
 start state, and prints one JSON object. `--batch N` runs N copies of the case
 in lockstep, as `mvcoba-eval` does.
@@ -18,17 +18,17 @@ import sys
 import jax  # noqa: E402
 from physics import backend_row, grasp_actions, settings  # noqa: E402
 
-from mvcoba_jax import evaluation  # noqa: E402
 from mvcoba_jax.config import resolve  # noqa: E402
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
 from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 from mvcoba_jax.suites import SUITES, suite_files  # noqa: E402
+from mvcoba_jax.suites import cases as suite_cases  # noqa: E402
 
 
 def bench(suite: str, repeats: int, batch: int) -> dict:
   files = suite_files([suite])[suite]
   cases = [read_case(f) for f in files]
-  config = evaluation.suite_config(resolve(None), evaluation.pool_for(cases))
+  config = suite_cases.suite_config(resolve(None), suite_cases.pool_for(cases))
   env_on = lambda backend: Tabletop(dataclasses.replace(
       config, scene=dataclasses.replace(config.scene, backend=backend)))
   native = env_on('native')

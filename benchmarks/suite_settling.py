@@ -21,15 +21,15 @@ import jax  # noqa: E402
 import numpy as np  # noqa: E402
 from physics import settings  # noqa: E402
 
-from mvcoba_jax import evaluation  # noqa: E402
 from mvcoba_jax.config import resolve  # noqa: E402
 from mvcoba_jax.sim.scenarios import read_case  # noqa: E402
 from mvcoba_jax.suites import suite_files  # noqa: E402
+from mvcoba_jax.suites import cases as suite_cases  # noqa: E402
 
 
 def settle(files: list[pathlib.Path], keys: int, edge: float) -> list[dict]:
   cases = [read_case(f) for f in files]
-  env, states = evaluation.settled_starts(cases, resolve(None), keys)
+  env, states = suite_cases.settled_starts(cases, resolve(None), keys)
   xy = np.abs(np.asarray(jax.vmap(env.object_positions)(states))[..., :2]).max(axis=-1)
   play = np.asarray(states.in_play)
   near = play & (xy > env.config.scene.workspace_half - edge)

@@ -28,6 +28,7 @@ VARIANTS = {
     'paper_text': ['--config', 'paper_text'],
     'targets': ['--set', 'train.bootstrap_no_change=false', '--set', 'train.failed_grasp_reward=0'],
     'authors': ['--config', 'authors'],
+    'authors_nofresh': ['--config', 'authors', '--set', 'train.fresh_in_batch=false'],
     'heap': ['--set', 'env.drop=heap'],
     'fresh': ['--set', 'train.fresh_in_batch=true'],
     'symmetry': ['--set', 'train.grasp_symmetry=true'],

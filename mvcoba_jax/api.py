@@ -36,6 +36,7 @@ from mvcoba_jax.sim.shapes import BLOCK_TABLES
 from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites import suite_files
 from mvcoba_jax.training import Trainer
+from mvcoba_jax.suites import cases as suite_cases
 
 __all__ = ['EvaluationError', 'RESULT_FILES', 'RUN_FILES', 'TrainError', 'TrainResult',
            'evaluate', 'join_evaluations', 'load_policy', 'sweep', 'sweep_runs', 'train']
@@ -352,19 +353,19 @@ def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, ru
     moves_of = {}
     if fit_overlaps is not None:
       for name, cases in cases_of.items():
-        cases_of[name], moves = evaluation.fitted(cases, base, fit_overlaps)
+        cases_of[name], moves = suite_cases.fitted(cases, base, fit_overlaps)
         moves_of[name] = {c.name: {'max_mm': round(1000 * max(m), 1),
                                    'mean_mm': round(1000 * sum(m) / len(m), 2),
                                    'lines_mm': {str(o.line): round(1000 * d, 1)
                                                 for o, d in zip(c.objects, m) if d}}
                           for c, m in zip(cases, moves)}
     # Fitted objects fall onto what they were lifted from: their neighbours may shift as far.
-    settle_move = max(evaluation.SETTLE_MOVE, fit_overlaps or 0.0)
+    settle_move = max(suite_cases.SETTLE_MOVE, fit_overlaps or 0.0)
     bad = [m for cases in cases_of.values()
-           for m in evaluation.case_problems(cases, base, settle_move)]
+           for m in suite_cases.case_problems(cases, base, settle_move)]
     hints = [] if not bad or allow_bad_cases else [
         f'{name}: {hint}' for name, files in files_of.items()
-        if (hint := evaluation.other_block_table(files, base, table_of[name]))]
+        if (hint := suite_cases.other_block_table(files, base, table_of[name]))]
     loaded = [load_policy(path) for path in checkpoints]
     trained = [(config_lib.trained_as(c), c.seed) for c, _, _ in loaded] + [(None, None)]
     sources = [(config_lib.evaluated(c, overrides), model, step) for c, model, step in loaded]
@@ -451,7 +452,7 @@ def _row(suite, cases, label, source, base, protocol, runs, max_actions, seed, o
   """One policy's row of one suite: its runs, their pictures when asked, the scored counts."""
   say = print if progress else (lambda *a, **k: None)
   config = base if isinstance(source, str) else source[0]
-  env = Tabletop(evaluation.suite_config(config, evaluation.pool_for(cases)),
+  env = Tabletop(suite_cases.suite_config(config, suite_cases.pool_for(cases)),
                  frames=video.FRAMES_PER_PRIMITIVE if video_too else 0)
   policy, views = evaluation.make_policy(source, env.config, protocol == 'online',
                                          protocol == 'no-repeat')

@@ -4,13 +4,13 @@ import jax
 import numpy as np
 import pytest
 
-from mvcoba_jax import evaluation
 from mvcoba_jax.config import resolve
 from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.primitives import GRASP
 from mvcoba_jax.sim.scenarios import case_slots, case_to_layout, read_case, stack_layouts
 from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites import SUITES_DIR
+from mvcoba_jax.suites import cases as suite_cases
 from tests.helpers import BACKENDS, actions, make_env
 from tests.penetration import max_penetration
 
@@ -61,7 +61,7 @@ def test_pinwheel_forces_a_push():
   the half turn's 8 rotations, lifts nothing: the fingers land on a neighbour and stop there
   (scene.press_force). The case's isolated cylinder, the control, is lifted."""
   case = read_case(SUITES_DIR / 'ordered' / 'ordered-00.scn')
-  env = Tabletop(evaluation.suite_config(resolve('default'), evaluation.pool_for([case])))
+  env = Tabletop(suite_cases.suite_config(resolve('default'), suite_cases.pool_for([case])))
   rotations = env.config.env.num_rotations // 2
   start = jax.jit(env.reset_from_case)(case_to_layout(case, env))
   n = len(case.objects)

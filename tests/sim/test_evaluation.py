@@ -14,6 +14,7 @@ from mvcoba_jax.config import resolve
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts
 from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites import SUITES_DIR
+from mvcoba_jax.suites import cases as suite_cases
 
 CASES = {
     'pair.scn': 'cube red 0.05 0.0 0\nflat_box blue -0.1 0.1 30\n',
@@ -29,7 +30,7 @@ def setup(tmp_path_factory):
     (folder / name).write_text(text)
   config = resolve('tiny')
   cases = [read_case(folder / name) for name in CASES]
-  env = Tabletop(evaluation.suite_config(config, evaluation.pool_for(cases)))
+  env = Tabletop(suite_cases.suite_config(config, suite_cases.pool_for(cases)))
   policy = evaluation.heuristic_policy(config.env.num_rotations)
   run = lambda l, k: evaluation.evaluate(env, policy, (0, 1), l, k, MAX_ACTIONS)
   layouts = stack_layouts([case_to_layout(c, env) for c in cases])
@@ -109,7 +110,7 @@ def test_runs_moved_to_a_smaller_batch_end_as_in_the_whole_batch(setup, one_and_
 
 
 def test_suite_pool_smaller_than_the_training_drops_is_fine():
-  config = evaluation.suite_config(resolve('default'), (('cube', 2),))
+  config = suite_cases.suite_config(resolve('default'), (('cube', 2),))
   assert Tabletop(config).num_slots == 2 and config.env.num_objects == 2
 
 
@@ -180,11 +181,11 @@ def test_load_check_holds_objects_on_the_table_not_those_set_on_the_heap():
   latter (each 'listed on the table'); with its 1 cm bound, none."""
   case = read_case(SUITES_DIR / 'random' / 'random-05.scn')
   config = resolve('default')
-  strict = evaluation.case_problems([case], config, settle_move=0.001)
+  strict = suite_cases.case_problems([case], config, settle_move=0.001)
   on_table = {o.line for o in case.objects if len(_fields(case, o.line)) == 5}
   named = {int(m.split(':')[1]) for m in strict}
   assert named and named <= on_table and all('listed on the table, moved' in m for m in strict)
-  assert evaluation.case_problems([case], config) == []
+  assert suite_cases.case_problems([case], config) == []
 
 
 def _fields(case, line):

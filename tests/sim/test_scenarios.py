@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from mvcoba_jax.config import resolve
-from mvcoba_jax.evaluation import case_problems, pool_for, settled_starts, suite_config
-from mvcoba_jax.occlusion import visibility
+from mvcoba_jax.suites.cases import case_problems, pool_for, settled_starts, suite_config
+from mvcoba_jax.suites.visibility import visibility
 from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.geometry import quat_mul, yaw_quat
 from mvcoba_jax.sim.scenarios import (
@@ -385,7 +385,7 @@ def test_fit_overlaps_leaves_a_valid_case_as_it_is(public_cases):
 def test_overlaps_of_another_block_table_are_named_as_its(tmp_path):
   """A VPG-format file written with the MV-COBA authors' mesh numbers (0.obj an octagon 25 mm
   thick) read with VPG's (0.obj a 93 mm prism): the load check says which table fits."""
-  from mvcoba_jax.evaluation import other_block_table
+  from mvcoba_jax.suites.cases import other_block_table
   lines = [f'0.obj 0.5 0.5 0.5 {-0.62 + 0.032 * i:.3f} 0.0 0.0313 0.0 0.0 0.0' for i in range(4)]
   path = tmp_path / 'authors-numbering.txt'
   path.write_text('\n'.join(lines) + '\n')

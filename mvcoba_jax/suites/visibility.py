@@ -5,16 +5,16 @@ from __future__ import annotations
 import jax
 import numpy as np
 
-from mvcoba_jax import evaluation
 from mvcoba_jax.sim.scenarios import case_to_layout, stack_layouts
 from mvcoba_jax.sim.tabletop import Tabletop
+from mvcoba_jax.suites import cases as suite_cases
 
 
 def visibility(cases, config, seen: float = 0.5) -> list[dict]:
   """Per case: each object's visible fraction per camera (its rays' hits with the case's
   occluders over its hits with them parked), and the lines of the objects no camera sees above
   `seen` and of those only one camera does."""
-  env = Tabletop(evaluation.suite_config(config, evaluation.pool_for(cases)))
+  env = Tabletop(suite_cases.suite_config(config, suite_cases.pool_for(cases)))
   layouts = [case_to_layout(c, env) for c in cases]
   states = jax.jit(jax.vmap(env.reset_from_case))(stack_layouts(layouts))
   origins, directions = env.camera_rays
