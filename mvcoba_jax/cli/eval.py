@@ -32,7 +32,7 @@ from mvcoba_jax.sim.scenarios import FIT_BOUND, MAX_FIT_BOUND
 from mvcoba_jax.suites import SUITES
 
 
-def main(argv=None) -> int:
+def build_parser() -> argparse.ArgumentParser:
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   config_lib.add_arguments(parser)
   parser.add_argument('--checkpoint', '--compare', nargs='+', default=[],
@@ -84,6 +84,11 @@ def main(argv=None) -> int:
                            'that interpenetrate as placed, leave the workspace as the case '
                            'settles, or move more than 1 cm from where the file puts them on '
                            'the table')
+  return parser
+
+
+def main(argv=None) -> int:
+  parser = build_parser()
   args = parser.parse_args(argv)
   if args.tables:
     if args.checkpoint or args.baseline:
