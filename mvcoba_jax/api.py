@@ -185,7 +185,7 @@ def _train(config: Config, trainer: Trainer, devices, workdir: pathlib.Path, res
   greedy = summary(eval_records)
   if lead:
     (workdir / 'eval_summary.json').write_text(json.dumps(greedy, indent=1))
-    for name in ('grasp_success', 'action_efficiency'):
+    for name in ('grasp_success', 'grasps_per_action'):
       events.add_scalar(f'greedy/{name}', greedy[name], int(state.actions))
     events.close()
   say(f'greedy evaluation on random drops: {json.dumps(greedy)}')

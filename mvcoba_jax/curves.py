@@ -18,7 +18,8 @@ def windowed_rate(hits: np.ndarray, window: int) -> np.ndarray:
 
 
 def training_curves(primitives: np.ndarray, successes: np.ndarray, window: int):
-  """(grasp attempts x, grasp success), (actions x, action efficiency) over sliding windows."""
+  """(grasp attempts x, grasp success), (actions x, successful grasps per action) over sliding
+  windows. Not the paper's action efficiency (objects per action of completed test runs)."""
   grasps = primitives == 1
   success = windowed_rate(successes[grasps].astype(float), window)
   efficiency = windowed_rate(successes.astype(float), window)
@@ -34,7 +35,7 @@ def plot(primitives, successes, window: int, path: str | pathlib.Path, title: st
               ylim=(0, 1))
   axes[1].plot(ax_, ay, color='tab:orange')
   axes[1].set(xlabel='training actions',
-              ylabel=f'action efficiency (last {window} actions)', ylim=(0, 1))
+              ylabel=f'successful grasps per action (last {window})', ylim=(0, 1))
   for a in axes:
     a.grid(alpha=0.3)
   if title:
@@ -53,12 +54,12 @@ def on_actions(primitives, successes, window: int) -> tuple[np.ndarray, np.ndarr
 
 def plot_groups(groups: dict[str, list[tuple[np.ndarray, np.ndarray]]], window: int,
                 folder: str | pathlib.Path) -> list[pathlib.Path]:
-  """One PNG per metric (curves-grasp_success.png, curves-action_efficiency.png): per group
+  """One PNG per metric (curves-grasp_success.png, curves-grasps_per_action.png): per group
   (a method), the mean over its runs (seeds) with a band from their lowest to their highest."""
   paths = []
   for m, (metric, label) in enumerate((('grasp_success', f'grasp success (last {window} grasps)'),
-                                       ('action_efficiency',
-                                        f'action efficiency (last {window} actions)'))):
+                                       ('grasps_per_action',
+                                        f'successful grasps per action (last {window})'))):
     fig = Figure(figsize=(8, 4.5))
     ax = fig.subplots()
     for name, runs in groups.items():

@@ -69,7 +69,7 @@ def summary(records: list[dict]) -> dict:
   success = sum(r['grasp_success'] for r in grasps)
   return {'actions': len(records), 'grasp_attempts': len(grasps), 'grasp_successes': success,
           'grasp_success': success / max(len(grasps), 1),
-          'action_efficiency': success / max(len(records), 1),
+          'grasps_per_action': success / max(len(records), 1),
           'pushes': len(records) - len(grasps)}
 
 

@@ -227,7 +227,7 @@ def test_sweep_of_methods_and_seeds_trains_evaluates_and_aggregates(tmp_path, ca
   assert runs == sorted(w.name for w in trained)
   assert runs == ['grasp_only-s0', 'grasp_only-s1', 'mvcoba-s0', 'mvcoba-s1']
   assert (sweep / 'curves-grasp_success.png').is_file()
-  assert (sweep / 'curves-action_efficiency.png').is_file()
+  assert (sweep / 'curves-grasps_per_action.png').is_file()
   assert all(json.loads((sweep / r / 'config.json').read_text())['seed'] == int(r[-1])
              for r in runs)
   case = tmp_path / 'case.scn'
