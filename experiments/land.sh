@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# Copies a study's finished evaluations and its log into docs/results/recipe/screen (the layout
-# recipe_table.py reads: eval/NAME/results.json, study.jsonl) and writes its table beside them.
-#   bash experiments/land.sh /work/study-recipe
+# Copies a study's finished evaluations and its log into docs/results/recipe/STAGE (screen by
+# default; the layout recipe_table.py reads: eval/NAME/results.json, study.jsonl) and writes its
+# table beside them.
+#   bash experiments/land.sh /work/study-recipe [screen|confirm]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-study=$1 screen=docs/results/recipe/screen
+study=$1 screen=docs/results/recipe/${2:-screen}
 mkdir -p "$screen/eval"
 for d in "$study"/eval/*/; do
   [ -f "$d/done" ] || continue

@@ -56,8 +56,8 @@ def table(work: pathlib.Path, metrics=METRICS) -> str:
       entry = next(iter(over.values()), {})
       cells += [cell(entry.get(m)) for m in metrics]
     seeds = len(evaluations[variant])
-    lines.append(f'| {variant} | {seeds} | ' + ' | '.join(cells)
-                 + f' | {minutes.get(variant, math.nan):.1f} |')
+    took = f'{minutes[variant]:.1f}' if variant in minutes else '-'
+    lines.append(f'| {variant} | {seeds} | ' + ' | '.join(cells) + f' | {took} |')
   names = [pathlib.Path(s).name for s in suites or []]
   head = ('| variant | seeds | ' + ' | '.join(f'{s}: {m.replace("_", " ")}' for s in names
                                              for m in metrics)
