@@ -24,7 +24,6 @@ import sys
 import time
 
 import jax
-import jax.numpy as jnp
 from physics import settings  # noqa: E402
 
 from mvcoba_jax import evaluation, runtime, task  # noqa: E402
@@ -42,16 +41,15 @@ def step_cost(suite: str, repeats: int) -> dict:
   env = Tabletop(suite_cases.suite_config(config, suite_cases.pool_for(cases)))
   n = len(cases)
   layouts = stack_layouts([case_to_layout(c, env) for c in cases])
-  states, _ = jax.jit(lambda l, k: evaluation.start(env, l, k))(
+  states, _ = jax.jit(lambda l, k: suite_cases.start(env, l, k))(
       layouts, jax.random.split(jax.random.PRNGKey(0), n))
   policy = evaluation.heuristic_policy(config.env.num_rotations)
 
   @jax.jit
   def action(states, key):
-    obs = task.observe(env, states)
-    chosen = policy(obs, jnp.ones(n, bool), jax.random.split(key, n), None)
-    return task.step(env, (0, 1), states, obs, jnp.zeros(n, jnp.int32), chosen,
-                     config.train)
+    begun = task.begin(env, states)
+    chosen = policy(begun.obs, begun.changed, jax.random.split(key, n), None)
+    return task.step(env, (0, 1), begun, chosen, config.train)
 
   emptied = jax.jit(jax.vmap(env.emptied))(states)
   times = {'full': [], 'emptied': []}

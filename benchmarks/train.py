@@ -41,17 +41,20 @@ def bench(config, batch: int, target: str, backend: str, repeats: int) -> dict:
   k = config.train.steps_per_iteration
 
   q = jax.jit(trainer.q_maps)
-  _, _, forward = timed(q, state.params, state.obs, repeats=repeats)
-  action = agent.greedy_actions(q(state.params, state.obs), state.changed, trainer.method)
-  world = agent.to_world(action, state.obs.depth, trainer.views, config)
-  _, _, physics = timed(jax.jit(jax.vmap(trainer.env.step)), state.env, world, repeats=repeats)
-  _, _, rendering = timed(jax.jit(trainer.observe), state.env, repeats=repeats)
+  tabletops = state.task
+  _, _, forward = timed(q, state.params, tabletops.obs, repeats=repeats)
+  action = agent.greedy_actions(q(state.params, tabletops.obs), tabletops.changed,
+                                trainer.method)
+  world = agent.to_world(action, tabletops.obs.depth, trainer.views, config)
+  _, _, physics = timed(jax.jit(jax.vmap(trainer.env.step)), tabletops.env, world,
+                        repeats=repeats)
+  _, _, rendering = timed(jax.jit(trainer.observe), tabletops.env, repeats=repeats)
   _, _, update = timed(jax.jit(trainer.update), state, jax.random.PRNGKey(2), repeats=repeats)
   parts = {'physics': physics, 'rendering': rendering, 'network_act_forward': forward,
            'network_update': update}
   if target == 'network':  # the update's target forward, alone: batch_size sampled next states
     sampled = jax.tree.map(lambda x: jnp.resize(x, (config.train.batch_size,) + x.shape[1:]),
-                           state.obs)
+                           tabletops.obs)
     _, _, parts['network_target_in_update'] = timed(q, state.target_params, sampled,
                                                     repeats=repeats)
   return {

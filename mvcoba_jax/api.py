@@ -156,7 +156,7 @@ def _train(config: Config, trainer: Trainer, devices, workdir: pathlib.Path, res
               'loss': float(np.mean(np.asarray(log.loss))),
               'epsilon': float(np.asarray(log.epsilon)[-1]), 'episodes': int(state.episodes),
               'updates': int(state.updates), 'skipped_updates': int(state.skipped_updates),
-              'health_resets': int(state.env.health_resets.sum()),
+              'health_resets': int(state.task.env.health_resets.sum()),
               'grasp_success': so_far['grasp_success']}
       if lead:
         write_records(actions_path, new, 'a')

@@ -56,8 +56,11 @@ def incompatibilities(saved: dict, current: dict, where) -> list[str]:
 
 
 def _name(path) -> str:
-  """`env.sim.qpos`, `params.fcns.0.trunk.blocks.0.conv1.kernel.value`: a leaf's tree path."""
-  return jax.tree_util.keystr(path, simple=True, separator='.')
+  """`env.sim.qpos`, `params.fcns.0.trunk.blocks.0.conv1.kernel.value`: a leaf's tree path. The
+  task state's fields (`TrainState.task`) keep the names they had at the top of the training
+  state, so checkpoints written before it existed still restore."""
+  name = jax.tree_util.keystr(path, simple=True, separator='.')
+  return name[len('task.'):] if name.startswith('task.') else name
 
 
 def _leaves(state) -> dict:

@@ -25,7 +25,7 @@ from mvcoba_jax import replay as replay_lib
 from mvcoba_jax.config import Config
 from mvcoba_jax.metrics import RunLog
 from mvcoba_jax.sim.geometry import pixel_to_world
-from mvcoba_jax.sim.tabletop import EnvState, Layout, Tabletop, where_envs
+from mvcoba_jax.sim.tabletop import Layout, Tabletop, where_envs
 from mvcoba_jax.suites.cases import start
 
 # policy(obs (N,), changed (N,), keys (N, 2), failed) -> agent.PixelAction; per-run keys keep
@@ -66,7 +66,6 @@ class Runs:
   picked: jnp.ndarray
   lost: jnp.ndarray
   objects: jnp.ndarray
-  failures: jnp.ndarray  # consecutive failed actions
   finished: jnp.ndarray
   completed: jnp.ndarray
   # Failed actions since the scene last changed (N, F, 4: primitive, rotation, row, col), the
@@ -173,10 +172,9 @@ class OnlinePolicy:
 
 @struct.dataclass
 class Batch:
-  """The evaluation loop's carry: the runs in the batch (B,) and the lockstep action count."""
-  states: EnvState
-  obs: perception.Observation
-  changed: jnp.ndarray  # (B,) the last action changed the scene
+  """The evaluation loop's carry: the runs in the batch (B,), each run's task and counts, and
+  the lockstep action count."""
+  task: task.State
   runs: Runs
   keys: jnp.ndarray  # (B, 2)
   t: jnp.ndarray  # int32: lockstep actions taken
@@ -188,12 +186,13 @@ def begin(env: Tabletop, views: tuple[int, ...], layouts: Layout, keys, max_acti
           record: bool) -> Batch:
   """Every run settled at its start, counters at zero (and an empty trace with `record`)."""
   states, k_loop = start(env, layouts, keys)
-  obs = task.observe(env, states)
+  begun = task.begin(env, states)
+  obs = begun.obs
   n = layouts.in_play.shape[0]
   zeros = jnp.zeros(n, jnp.int32)
   runs = Runs(actions=zeros, grasp_attempts=zeros, grasp_successes=zeros, picked=zeros,
               lost=zeros, objects=jnp.sum(states.in_play, axis=1, dtype=jnp.int32),
-              failures=zeros, finished=jnp.zeros(n, bool), completed=jnp.zeros(n, bool),
+              finished=jnp.zeros(n, bool), completed=jnp.zeros(n, bool),
               failed=jnp.zeros((n, env.config.env.max_failures + 1, 4), jnp.int32),
               tried=zeros, repeated_failures=zeros)
   if record:
@@ -204,8 +203,7 @@ def begin(env: Tabletop, views: tuple[int, ...], layouts: Layout, keys, max_acti
                      jax.tree.map(lambda x: jnp.zeros(x.shape, x.dtype), shapes), runs.finished)
     runs = runs.replace(trace=jax.tree.map(
         lambda x: jnp.zeros((n, max_actions) + x.shape[1:], x.dtype), step))
-  return Batch(states=states, obs=obs, changed=jnp.ones(n, bool), runs=runs, keys=k_loop,
-               t=jnp.int32(0))
+  return Batch(task=begun, runs=runs, keys=k_loop, t=jnp.int32(0))
 
 
 def _snapshot(env, obs, states, action: agent.PixelAction, info, active) -> Trace:
@@ -250,17 +248,17 @@ def lockstep(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch
   """One lockstep action of every run of the batch; `retired`: the finished runs outside this
   batch (for `progress`)."""
   online = isinstance(policy, OnlinePolicy)
-  states, obs, runs = batch.states, batch.obs, batch.runs
+  before, runs = batch.task, batch.runs
+  obs = before.obs
   keys, k_act = jax.vmap(jax.random.split, out_axes=1)(batch.keys)
   active = ~runs.finished
   learner = batch.learner
   if online:
-    action, q = policy.act(learner, obs, batch.changed)
-    learner = policy.learn(learner, q, batch.changed, active)
+    action, q = policy.act(learner, obs, before.changed)
+    learner = policy.learn(learner, q, before.changed, active)
   else:
-    action = policy(obs, batch.changed, k_act, (runs.failed, runs.tried))
-  next_states, next_obs, out = task.step(env, views, states, obs, runs.failures, action,
-                                          env.config.train)
+    action = policy(obs, before.changed, k_act, (runs.failed, runs.tried))
+  after, out = task.step(env, views, before, action, env.config.train)
   if online:
     learner = policy.remember(learner, obs, action, out, active)
   info = out.info
@@ -271,22 +269,20 @@ def lockstep(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch
   runs = runs.replace(
       actions=count(runs.actions, 1), grasp_attempts=count(runs.grasp_attempts, is_grasp),
       grasp_successes=count(runs.grasp_successes, info.grasp_success), picked=picked,
-      lost=count(runs.lost, info.lost), failures=jnp.where(active, out.failures, runs.failures),
-      finished=runs.finished | out.done,
+      lost=count(runs.lost, info.lost), finished=runs.finished | out.done,
       completed=runs.completed | (active & out.cleared & (picked == runs.objects)),
       failed=failed, tried=tried, repeated_failures=count(runs.repeated_failures, repeated))
   if record:
     runs = runs.replace(trace=jax.tree.map(
         lambda buf, x: buf.at[:, batch.t].set(x), runs.trace,
-        _snapshot(env, obs, states, action, info, active)))
+        _snapshot(env, obs, before.env, action, info, active)))
   if progress is not None:
     jax.debug.callback(progress, batch.t + 1, retired + jnp.sum(runs.finished))
   # A finished run steps on with its table emptied, so the batch waits for the others at
   # a fraction of the cost; nothing it does is counted.
-  next_states = where_envs(runs.finished, jax.vmap(env.emptied)(next_states), next_states)
-  return Batch(states=next_states, obs=where_envs(active, next_obs, obs),
-               changed=jnp.where(active, out.changed, batch.changed), runs=runs, keys=keys,
-               t=batch.t + 1, learner=learner)
+  after = where_envs(active, after, before).replace(
+      env=where_envs(runs.finished, jax.vmap(env.emptied)(after.env), after.env))
+  return Batch(task=after, runs=runs, keys=keys, t=batch.t + 1, learner=learner)
 
 
 _lockstep = jax.jit(lockstep, static_argnames=('env', 'policy', 'views', 'record', 'progress'))
@@ -328,7 +324,7 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
   """
   batch = begin(env, views, layouts, keys, max_actions, record)
   if isinstance(policy, OnlinePolicy):
-    batch = batch.replace(learner=jax.jit(policy.init)(batch.obs))
+    batch = batch.replace(learner=jax.jit(policy.init)(batch.task.obs))
   n = layouts.in_play.shape[0]
   size, members, runs = n, jnp.arange(n), batch.runs.replace(learner=batch.learner)
   while True:

@@ -31,8 +31,7 @@ def state_shardings(state: TrainState, mesh_: Mesh) -> TrainState:
 
   everything = jax.tree.map(lambda _: whole, state)
   return everything.replace(
-      env=along_first(state.env), obs=along_first(state.obs),
-      changed=along_first(state.changed), failures=along_first(state.failures),
+      task=along_first(state.task),
       pending=along_first(state.pending),
       reserve=everything.reserve.replace(states=along_first(state.reserve.states)),
       replay=everything.replay.replace(data=along_first(state.replay.data),

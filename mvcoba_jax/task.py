@@ -1,9 +1,10 @@
-"""The push-and-grasp task on B tabletops: the one lockstep step that training and evaluation run.
+"""The push-and-grasp task on B tabletops: its state and the one lockstep step that training and
+evaluation run.
 
 An action is executed in every tabletop, the scene observed again, and the task's bookkeeping done
 (docs/design.md): change observation, reward, the count of consecutive failed actions and
 the end of an episode (table cleared, stuck, or bad physics). What follows an episode's end is the
-caller's: training swaps in a fresh tabletop, evaluation stops counting the run.
+caller's: training swaps in a fresh tabletop (`restart`), evaluation stops counting the run.
 """
 from __future__ import annotations
 
@@ -15,7 +16,16 @@ from flax import struct
 
 from mvcoba_jax import agent, perception
 from mvcoba_jax.config import TrainConfig
-from mvcoba_jax.sim.tabletop import EnvState, StepInfo, Tabletop
+from mvcoba_jax.sim.tabletop import EnvState, StepInfo, Tabletop, where_envs
+
+
+@struct.dataclass
+class State:
+  """What the task carries from one action to the next, per tabletop (B,)."""
+  env: EnvState  # the scene
+  obs: perception.Observation  # what the cameras see of it
+  changed: jnp.ndarray  # bool: the last action changed the scene (True at an episode's start)
+  failures: jnp.ndarray  # int32: failed actions in a row this episode
 
 
 @struct.dataclass
@@ -38,14 +48,32 @@ def observe(env: Tabletop, states: EnvState, per_env: Callable = _whole) -> perc
   return per_env(jax.vmap(lambda s: perception.observe(env, s)))(states)
 
 
-def step(env: Tabletop, views: tuple[int, ...], states: EnvState, obs: perception.Observation,
-         failures, action: agent.PixelAction, train: TrainConfig,
-         per_env: Callable = _whole) -> tuple[EnvState, perception.Observation, Outcome]:
-  """Executes `action` (B,) chosen on `obs` in every tabletop; returns the tabletops, what they
-  look like now and the outcome, rewarded as `train` says."""
+def begin(env: Tabletop, states: EnvState, per_env: Callable = _whole) -> State:
+  """Tabletops at the start of their episodes: observed, `changed` True, no failures."""
+  b = states.in_play.shape[0]
+  return State(env=states, obs=observe(env, states, per_env), changed=jnp.ones(b, bool),
+               failures=jnp.zeros(b, jnp.int32))
+
+
+def restart(env: Tabletop, state: State, fresh, states: EnvState,
+            per_env: Callable = _whole) -> State:
+  """`state` with the tabletops `states` in place, those where `fresh` (B,) begun anew (observed
+  again, `changed` True, no failures): training's fresh tabletops for the episodes that ended."""
+  obs = jax.lax.cond(jnp.any(fresh),
+                     lambda: where_envs(fresh, observe(env, states, per_env), state.obs),
+                     lambda: state.obs)
+  return State(env=states, obs=obs, changed=state.changed | fresh,
+               failures=jnp.where(fresh, 0, state.failures))
+
+
+def step(env: Tabletop, views: tuple[int, ...], state: State, action: agent.PixelAction,
+         train: TrainConfig, per_env: Callable = _whole) -> tuple[State, Outcome]:
+  """Executes `action` (B,) chosen on `state.obs` in every tabletop; returns the task after it
+  and the outcome, rewarded as `train` says."""
   config = env.config
+  obs = state.obs
   states, info = per_env(jax.vmap(env.step))(
-      states, agent.to_world(action, obs.depth, views, config))
+      state.env, agent.to_world(action, obs.depth, views, config))
   next_obs = observe(env, states, per_env)
   healthy = info.healthy
   changed = perception.change_observed(obs, next_obs, info.grasp_success,
@@ -53,8 +81,9 @@ def step(env: Tabletop, views: tuple[int, ...], states: EnvState, obs: perceptio
   reward = jnp.where(healthy, agent.reward(action.primitive, info.grasp_success, changed, train),
                      0.0)
   failures = jnp.where(agent.failed(action.primitive, info.grasp_success, changed),
-                       failures + 1, 0)
+                       state.failures + 1, 0)
   cleared = ~jnp.any(states.in_play, axis=1)
   done = cleared | (failures > config.env.max_failures) | ~healthy
-  return states, next_obs, Outcome(info=info, changed=changed, reward=reward, failures=failures,
-                                   cleared=cleared, done=done)
+  return (State(env=states, obs=next_obs, changed=changed, failures=failures),
+          Outcome(info=info, changed=changed, reward=reward, failures=failures, cleared=cleared,
+                  done=done))

@@ -18,16 +18,13 @@ from mvcoba_jax import agent, methods, networks, perception, task
 from mvcoba_jax import replay as replay_lib
 from mvcoba_jax.config import Config
 from mvcoba_jax.sim import reserve as reserve_lib
-from mvcoba_jax.sim.tabletop import EnvState, Tabletop, where_envs
+from mvcoba_jax.sim.tabletop import Tabletop, where_envs
 
 
 @struct.dataclass
 class TrainState:
-  env: EnvState  # (B,) environments
+  task: task.State  # (B,) tabletops, what they look like, last change, failures in a row
   reserve: reserve_lib.Reserve  # settled tabletops for episodes that end
-  obs: perception.Observation  # (B,) current heightmaps
-  changed: jnp.ndarray  # (B,) bool: the last action changed the scene (True at episode start)
-  failures: jnp.ndarray  # (B,) int32: consecutive failed actions this episode
   params: Any
   target_params: Any
   opt_state: Any
@@ -111,8 +108,8 @@ class Trainer:
     k_params, k_env, key = jax.random.split(key, 3)
     params = self.init_params(k_params)
     dropped = jax.vmap(self.env.reset)(jax.random.split(k_env, 3 * b))  # one compiled reset
-    env_states = jax.tree.map(lambda x: x[:b], dropped)
-    obs = self.observe(env_states)
+    begun = task.begin(self.env, jax.tree.map(lambda x: x[:b], dropped), self.per_env)
+    obs = begun.obs
     example = jax.tree.map(lambda x: x[0], obs)
     zeros = lambda dtype: jnp.zeros(b, dtype)
     pending = replay_lib.Transition(
@@ -120,10 +117,9 @@ class Trainer:
         row=zeros(jnp.int32), col=zeros(jnp.int32), reward=zeros(jnp.float32),
         done=zeros(jnp.bool_), changed=zeros(jnp.bool_), next_value=zeros(jnp.float32))
     return TrainState(
-        env=env_states, obs=obs,
+        task=begun,
         reserve=reserve_lib.Reserve(states=jax.tree.map(lambda x: x[b:], dropped),
                                     available=jnp.int32(2 * b)),
-        changed=jnp.ones(b, bool), failures=jnp.zeros(b, jnp.int32),
         params=params, target_params=params, opt_state=self.optimizer.init(params),
         replay=replay_lib.Replay.create(self.config.train.replay_capacity, example),
         pending=pending, pending_valid=jnp.bool_(False), key=key, actions=jnp.int32(0), updates=jnp.int32(0), skipped_updates=jnp.int32(0),
@@ -191,17 +187,17 @@ class Trainer:
     t = self.config.train
     key, k_act, k_learn, k_reset = jax.random.split(state.key, 4)
     eps = jnp.where(epsilon >= 0, epsilon, agent.epsilon_at(state.actions, t))
-    q = self.q_maps(state.params, state.obs)
-    occupied = agent.surface_height(state.obs.depth, self.views) > t.explore_min_height
-    maps = agent.rule_maps(q, state.obs.depth, self.method, self.config)
-    action, explored = agent.epsilon_greedy(maps, state.changed, occupied, eps, k_act, self.method)
-    env_states, obs, out = task.step(self.env, self.views, state.env, state.obs, state.failures,
-                                     action, t, self.per_env)
+    before = state.task
+    q = self.q_maps(state.params, before.obs)
+    occupied = agent.surface_height(before.obs.depth, self.views) > t.explore_min_height
+    maps = agent.rule_maps(q, before.obs.depth, self.method, self.config)
+    action, explored = agent.epsilon_greedy(maps, before.changed, occupied, eps, k_act,
+                                            self.method)
+    after, out = task.step(self.env, self.views, before, action, t, self.per_env)
     info, healthy, changed, done = out.info, out.info.healthy, out.changed, out.done
     env_states, reserve = reserve_lib.swap_in(self.per_env(jax.vmap(self.env.reset)),
-                                              state.reserve, env_states, done, k_reset)
-    obs = jax.lax.cond(jnp.any(done), lambda: where_envs(done, self.observe(env_states), obs),
-                       lambda: obs)
+                                              state.reserve, after.env, done, k_reset)
+    after = task.restart(self.env, after, done, env_states, self.per_env)
 
     # The task goes on past an episode's end (docs/design.md; VPG does
     # the same): the action that ended an episode bootstraps from the fresh tabletop the robot
@@ -211,14 +207,14 @@ class Trainer:
     # No future after an action that changed nothing, with `train.bootstrap_no_change` off.
     no_future = ~healthy | (~changed if not t.bootstrap_no_change else False)
     transition = replay_lib.Transition(
-        obs=state.obs, primitive=action.primitive, rotation=action.rotation, row=action.row,
-        col=action.col, reward=out.reward, next_obs=where_envs(healthy, obs, state.obs),
+        obs=before.obs, primitive=action.primitive, rotation=action.rotation, row=action.row,
+        col=action.col, reward=out.reward, next_obs=where_envs(healthy, after.obs, before.obs),
         done=no_future, changed=changed | done, next_value=jnp.zeros_like(out.reward))
     if t.target == 'acting':
       # The last step's transitions led to the states acted on now (or ended in bad physics,
       # which does not bootstrap): this step's forward values their next states.
       store = state.pending.replace(
-          next_value=agent.future_value(q, state.changed, self.method, t))
+          next_value=agent.future_value(q, before.changed, self.method, t))
       add = learn & state.pending_valid
       state = state.replace(
           pending=jax.tree.map(lambda new, old: jnp.where(learn, new, old), transition,
@@ -233,8 +229,7 @@ class Trainer:
 
     b = done.shape[0]
     state = state.replace(
-        env=env_states, reserve=reserve, obs=obs, changed=changed | done,
-        failures=jnp.where(done, 0, out.failures), key=key, actions=state.actions + b,
+        task=after, reserve=reserve, key=key, actions=state.actions + b,
         episodes=state.episodes + jnp.sum(done, dtype=jnp.int32))
     log = StepLog(primitive=action.primitive, grasp_success=info.grasp_success, changed=changed,
                   reward=out.reward, done=done, healthy=healthy, picked=info.picked, lost=info.lost,

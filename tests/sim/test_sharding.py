@@ -26,10 +26,10 @@ state = jax.jit(trainer.init)(jax.random.PRNGKey(0))
 args = (jnp.bool_(True), jnp.float32(-1.0))
 one, log_one = jax.jit(trainer.iterate)(jax.device_put(state, jax.devices()[0]), *args)
 placed = sharding.place(state, sharding.mesh())
-assert len(placed.env.sim.qpos.sharding.device_set) == 2
+assert len(placed.task.env.sim.qpos.sharding.device_set) == 2
 iterate = jax.jit(sharded.iterate)
 two, log_two = iterate(placed, *args)
-assert len(two.env.sim.qpos.sharding.device_set) == 2, 'environments left the mesh'
+assert len(two.task.env.sim.qpos.sharding.device_set) == 2, 'environments left the mesh'
 iterate(two, *args)  # the state comes back sharded as it went in: no second compilation
 assert iterate._cache_size() == 1, 'the sharded step compiled again for its own output'
 np.testing.assert_array_equal(np.asarray(log_one.grasp_success), np.asarray(log_two.grasp_success))

@@ -30,9 +30,11 @@ def test_rewards_failures_and_episode_ends():
   rows = [(GRASP, 0, *cube), (GRASP, 0, *empty), (GRASP, 0, *empty), (PUSH, 0, *behind)]
   action = PixelAction(*(jnp.asarray(c, jnp.int32) for c in zip(*rows)))
   failures = jnp.asarray([0, 2, 0, 0], jnp.int32)
-  _, next_obs, out = jax.jit(lambda s, o, f, a: task.step(env, (0, 1), s, o, f, a,
-                                                          env.config.train))(
-      states, obs, failures, action)
+  before = task.State(env=states, obs=obs, changed=jnp.ones(4, bool), failures=failures)
+  after, out = jax.jit(lambda s, a: task.step(env, (0, 1), s, a, env.config.train))(
+      before, action)
+  next_obs = after.obs
+  np.testing.assert_array_equal(np.asarray(after.failures), np.asarray(out.failures))
   np.testing.assert_array_equal(np.asarray(out.info.grasp_success), [True, False, False, False])
   np.testing.assert_array_equal(np.asarray(out.reward), [1.0, 0.0, 0.0, 0.5])
   # The same transitions under the authors' rewards (a failed grasp 0 even where it changed the

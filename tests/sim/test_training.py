@@ -56,14 +56,25 @@ def test_training_steps_fill_the_replay_and_update(trainer, trained):
   assert int(state.updates) == 2 * k - 1
   assert int(state.skipped_updates) == 0
   assert all(np.isfinite(np.asarray(log.loss)).all() for log in logs)
-  assert np.asarray(state.env.healthy).all()
+  assert np.asarray(state.task.env.healthy).all()
+
+
+def test_checkpoint_names_keep_the_task_fields_where_earlier_runs_saved_them(trained):
+  """The task state (`TrainState.task`) is saved under the names its fields had at the top of
+  the training state, so a run checkpointed before it existed resumes."""
+  from mvcoba_jax.checkpoint import _leaves
+  names = set(_leaves(trained[0]))
+  assert {'env.sim.qpos', 'obs.depth', 'changed', 'failures'} <= names
+  assert not any(name.startswith('task.') for name in names)
 
 
 def test_episode_end_bootstraps_from_the_fresh_tabletop(trainer, trained, iterate):
   """The action that ends an episode is stored with the next tabletop as s_{t+1}, not as
   terminal: the task goes on, so clearing the table is worth as much as any other success."""
   state, _ = trained
-  empty = state.replace(env=state.env.replace(in_play=state.env.in_play.at[0].set(False)))
+  tabletops = state.task.env
+  empty = state.replace(task=state.task.replace(
+      env=tabletops.replace(in_play=tabletops.in_play.at[0].set(False))))
   after, log = iterate(empty, jnp.bool_(True), jnp.float32(-1.0))
   b = trainer.config.num_envs
   # Env 0's clearing action (step 1) enters the replay at step 2, after the previous step's
@@ -87,8 +98,8 @@ def test_acting_target_stores_the_next_forward_and_learns_from_it():
   state = jax.jit(trainer.init)(jax.random.PRNGKey(0))
   first, _ = step(state, *args)
   assert int(first.replay.size) == 0 and bool(first.pending_valid)
-  q = trainer.q_maps(first.params, first.obs)
-  expected = agent.future_value(q, first.changed, trainer.method, trainer.config.train)
+  q = trainer.q_maps(first.params, first.task.obs)
+  expected = agent.future_value(q, first.task.changed, trainer.method, trainer.config.train)
   second, _ = step(first, *args)
   b = trainer.config.num_envs
   assert int(second.replay.size) == b
@@ -320,7 +331,7 @@ def test_authors_recipe_on_real_transitions():
   np.testing.assert_array_equal(data.done, ~log.changed)  # no future where nothing changed
   assert (~log.changed).any() and log.changed.any()
   # The last stored transitions' future: the max over both maps of the step that stored them.
-  q = trainer.q_maps(before.params, before.obs)
+  q = trainer.q_maps(before.params, before.task.obs)
   np.testing.assert_allclose(data.next_value[-b:], np.asarray(q).reshape(b, -1).max(axis=1),
                              rtol=1e-5)
   # The loss: a grasp is labelled at its rotation and at that rotation turned half way.
