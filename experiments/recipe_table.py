@@ -48,7 +48,9 @@ def table(work: pathlib.Path, metrics=METRICS) -> str:
   suites = None
   lines = []
   for variant in [v for v in VARIANTS if v in evaluations]:
-    joined = report.joined_report(evaluations[variant])
+    # by the suite's folder name: studies run from other checkouts name other paths
+    joined = {pathlib.Path(suite).name: rows
+              for suite, rows in report.joined_report(evaluations[variant]).items()}
     suites = suites or list(joined)
     cells = []
     for suite in suites:
@@ -58,7 +60,7 @@ def table(work: pathlib.Path, metrics=METRICS) -> str:
     seeds = len(evaluations[variant])
     took = f'{minutes[variant]:.1f}' if variant in minutes else '-'
     lines.append(f'| {variant} | {seeds} | ' + ' | '.join(cells) + f' | {took} |')
-  names = [pathlib.Path(s).name for s in suites or []]
+  names = suites or []
   head = ('| variant | seeds | ' + ' | '.join(f'{s}: {m.replace("_", " ")}' for s in names
                                              for m in metrics)
           + ' | training (min) |\n|---|---|' + '---|' * (len(names) * len(metrics) + 1))
