@@ -19,6 +19,7 @@ from mvcoba_jax import api, folders, paper
 from mvcoba_jax.config import Config, ConfigError, validate
 from mvcoba_jax.checkpoint import holds_checkpoint
 from mvcoba_jax.report import write_whole
+from mvcoba_jax.sim.scenarios import ScenarioError
 from mvcoba_jax.suites import suite_files
 
 # Rough speeds on a 2-core CPU, native backend, default preset (docs/results/reproduction.md:
@@ -58,7 +59,7 @@ def reproduce(config: Config, *, methods=paper.PAPER_NAMES, seeds=(0, 1, 2), act
     api.check_work(runs, max_actions, files)
     for folder in [workdir, *(protocol_folder(out, p) for p in protocols)]:
       folders.check(folder, keep=True)
-  except folders.FolderError as e:
+  except (folders.FolderError, ScenarioError) as e:
     raise api.EvaluationError(str(e)) from None
   try:
     config = validate(dataclasses.replace(config, train=dataclasses.replace(
