@@ -34,9 +34,9 @@ from mvcoba_jax.sim.scenarios import (MAX_FIT_BOUND, ScenarioError, case_to_layo
                                       stack_layouts)
 from mvcoba_jax.sim.shapes import BLOCK_TABLES
 from mvcoba_jax.sim.tabletop import Tabletop
+from mvcoba_jax.suites import cases as suite_cases
 from mvcoba_jax.suites import suite_files
 from mvcoba_jax.training import Trainer
-from mvcoba_jax.suites import cases as suite_cases
 
 __all__ = ['EvaluationError', 'RESULT_FILES', 'RUN_FILES', 'TrainError', 'TrainResult',
            'evaluate', 'join_evaluations', 'load_policy', 'sweep', 'sweep_runs', 'train']
@@ -311,7 +311,8 @@ def block_tables(given, suites: list[str]) -> dict[str, str]:
 def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, runs: int = 5,
              max_actions: int = 60, seed: int = 0, protocol: str = 'frozen',
              config: str | None = None, overrides=(), blocks=(), allow_bad_cases: bool = False,
-             fit_overlaps: float | None = None, out='eval_out', resume: bool = False, overwrite: bool = False,
+             fit_overlaps: float | None = None, out='eval_out', resume: bool = False,
+             overwrite: bool = False,
              save_visuals: bool = False, video: bool = False, progress: bool = True) -> dict:
   """Evaluates trained policies (work directories or exports) and a `baseline` on suites (names
   of `suites.SUITES`, `all`, or paths of case files and folders): every case x `runs` runs of a
@@ -393,7 +394,8 @@ def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, ru
     raise EvaluationError(str(e)) from None
   if bad and not allow_bad_cases:
     raise EvaluationError('\n  '.join([*hints, *bad]) + '\n(--fit-overlaps moves objects that '
-                          'interpenetrate apart; --allow-bad-cases evaluates the cases as they are)')
+                          'interpenetrate apart; --allow-bad-cases evaluates the cases as they '
+                          'are)')
   for suite, moves in moves_of.items():
     moved = {case: m for case, m in moves.items() if m['lines_mm']}
     say(f'{suite}: --fit-overlaps moved objects in {len(moved)} of {len(moves)} cases' + ''.join(

@@ -22,7 +22,7 @@ class Rule:
   name: str
   text: str  # the rule in words (model.json)
   pick: Callable  # (changed (B,) bool, best (B, 2) each primitive's max) -> (B,) int32 primitive
-  future_over_both: bool  # the target's max is over both primitives' maps, else the one picked at s'
+  future_over_both: bool  # the target's max is over both primitives' maps, else the one at s'
   explores_primitive: bool  # a random action draws its primitive too, else keeps the rule's
 
 

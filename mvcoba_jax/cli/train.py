@@ -8,8 +8,8 @@
 
 The work directory gets config.json (the resolved config), actions.jsonl (one line per action),
 metrics.jsonl (one line per host iteration), checkpoints/ (Orbax, atomic, resumable) and
-curves.png (grasp success and successful grasps per action over the last 200 attempts). With `--methods`
-or `--seeds` it is a sweep folder: every method x seed trains in turn into its own
+curves.png (grasp success and successful grasps per action over the last 200 attempts). With
+`--methods` or `--seeds` it is a sweep folder: every method x seed trains in turn into its own
 `METHOD-sSEED/`; `--resume` continues those with a checkpoint and starts the others, and
 `mvcoba-eval --checkpoint runs/sweep/*` gives each method's interval over the seeds.
 """

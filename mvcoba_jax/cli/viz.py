@@ -17,9 +17,9 @@ import jax
 
 from mvcoba_jax import config as config_lib
 from mvcoba_jax import runtime
-from mvcoba_jax.suites.cases import pool_for, suite_config
 from mvcoba_jax.sim.scenarios import ScenarioError, case_to_layout, read_case
 from mvcoba_jax.sim.tabletop import Tabletop
+from mvcoba_jax.suites.cases import pool_for, suite_config
 from mvcoba_jax.viz import save_state, write_pictures
 
 

@@ -478,7 +478,10 @@ def fit_overlaps(case: Case, env, bound: float = FIT_BOUND,
     lo, hi = 0.0, bound
     for _ in range(_FIT_STEPS):
       mid = 0.5 * (lo + hi)
-      lo, hi = (mid, hi) if contacts(slot, pos + mid * direction, quat)[0] > tolerance else (lo, mid)
+      if contacts(slot, pos + mid * direction, quat)[0] > tolerance:
+        lo = mid
+      else:
+        hi = mid
     return hi
 
   for slot, obj in zip(slots, case.objects):
