@@ -6,12 +6,15 @@ so that the primitive's yaw points along +x (col) for every k and the weights ar
 rotations; one fully convolutional pass scores every pixel and its maps are turned back by
 +angle(k). Only the requested rotations are computed: the learner asks for the executed one.
 Turning a square map by a non-right angle cuts its corners: there the inputs read as missing
-cells and the turned-back maps read Q = 0 (the zero fill of `geometry.rotate_images`).
+cells and the turned-back maps read Q = 0 (the zero fill of `geometry.rotate_images`), unless
+`network.pad_to_diagonal` first pads the maps with missing cells to their diagonal.
 
 One fully convolutional network (FCN): per used view a colour and a depth stream down to 1/4 of
 the heightmap, concatenated over views, a trunk, a 1x1 head and bilinear upsampling to R x R.
 """
 from __future__ import annotations
+
+import math
 
 import jax
 import jax.numpy as jnp
@@ -174,6 +177,15 @@ class FCN(nnx.Module):
     return jax.image.resize(x, (n, side, side, x.shape[-1]), 'bilinear', antialias=False)
 
 
+def diagonal_padding(side: int, stride: int) -> int:
+  """Cells added on each side of a `side` map so that its diagonal fits, rounded up so that the
+  padded side is a multiple of the trunk's `stride` where it can be; 0 for stride 0 (no padding)."""
+  if not stride:
+    return 0
+  pad = -(-(math.ceil(side * math.sqrt(2)) - side) // 2)
+  return next((p for p in range(pad, pad + stride) if (side + 2 * p) % stride == 0), pad)
+
+
 def _normalise(x):
   """(..., 4) raw colour (0..1) + depth (m) -> network input, per INPUT_NORMALISATION."""
   mean = jnp.array(INPUT_NORMALISATION['color_mean'] + (0.0,), x.dtype)
@@ -205,6 +217,8 @@ class QNetwork(nnx.Module):
   def __init__(self, method: methods.Method, config: NetworkConfig, num_rotations: int,
                rngs: nnx.Rngs):
     self.num_rotations = num_rotations
+    stride = 32 if config.trunk == 'densenet121' else config.stem_patch
+    self.pad_stride = stride if config.pad_to_diagonal else 0
     self.views = method.views
     self.fuse = method.fuse
     self.streams = (0,) if self.fuse else self.views  # the inputs each FCN reads, by view
@@ -226,12 +240,14 @@ class QNetwork(nnx.Module):
     x = jnp.concatenate([color, depth[..., None]], axis=-1)  # (B, U, R, R, 4)
     x = jnp.moveaxis(x, 1, -2).reshape(b, 1, side, side, -1)
     x = jnp.broadcast_to(x, (b, k) + x.shape[2:]).reshape((b * k,) + x.shape[2:])
+    pad = diagonal_padding(side, self.pad_stride)
+    x = jnp.pad(x, ((0, 0), (pad, pad), (pad, pad), (0, 0)))
     angle = rotation_angle(rotations.reshape(-1), self.num_rotations)
-    x = _normalise(rotate_images(x, -angle).reshape(b * k, side, side, len(self.streams), 4))
+    x = _normalise(rotate_images(x, -angle).reshape(x.shape[:3] + (len(self.streams), 4)))
     inputs = {v: x[..., i, :] for i, v in enumerate(self.streams)}
     maps = {}
     for prims, fcn in zip(self.primitives, self.fcns):
-      out = rotate_images(fcn(inputs), angle)
+      out = rotate_images(fcn(inputs), angle)[:, pad:pad + side, pad:pad + side]
       maps.update({p: out[..., i] for i, p in enumerate(prims)})
     q = jnp.stack([maps[p] if p in maps else jnp.full((b * k, side, side), NO_ACTION, x.dtype)
                    for p in (PUSH, GRASP)], axis=1)

@@ -223,13 +223,15 @@ def test_a_state_saved_by_mvcoba_viz_runs_through_the_onnx_example(run, exported
       want[k] for k in ('primitive', 'rotation', 'row', 'col')]
 
 
-@pytest.mark.parametrize('method', ['mvp', 'cpg'])
-def test_baselines_export_round_trip_with_onnx_parity(method, tmp_path):
-  """MVP (four viewpoints fused in the graph) and CPG (a second output: the suppressed scores
-  its rule compares) export like the others: the folder loads back as the same policy, ONNX
-  matches JAX on every output, and the example picks the agent's action from them."""
+@pytest.mark.parametrize('method, overrides', [('mvp', []), ('cpg', []),
+                                               ('mvcoba', ['network.pad_to_diagonal=true'])])
+def test_other_networks_export_round_trip_with_onnx_parity(method, overrides, tmp_path):
+  """MVP (four viewpoints fused in the graph), CPG (a second output: the suppressed scores its
+  rule compares) and a network padded to the diagonal export like the others: the folder loads
+  back as the same policy, ONNX matches JAX on every output, and the example picks the agent's
+  action from them."""
   (tmp_path / 'run').mkdir()
-  trainer, workdir, _ = _workdir(resolve(TINY, [f'network.method={method}']),
+  trainer, workdir, _ = _workdir(resolve(TINY, [f'network.method={method}', *overrides]),
                                  tmp_path / 'run')
   paths = export.export(workdir, tmp_path / 'export')
   model_json = json.loads(paths['model_json'].read_text())

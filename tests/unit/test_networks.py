@@ -99,6 +99,47 @@ def test_one_rotation_equals_its_slice_of_all_rotations(states):
     np.testing.assert_allclose(some[b, :, 0], every[b, :, k], atol=1e-5)
 
 
+PADDED = dataclasses.replace(TINY, pad_to_diagonal=True)
+
+
+def test_diagonal_padding_fits_the_diagonal_on_the_stem_grid():
+  assert networks.diagonal_padding(112, 4) == 24  # 160 >= 158.4 cells, 40 patches
+  assert networks.diagonal_padding(32, 4) == 8  # 48 >= 45.3
+  assert networks.diagonal_padding(224, 32) == 48  # 320 >= 316.8, DenseNet's stride
+  assert networks.diagonal_padding(112, 0) == 0
+
+
+def test_padding_to_the_diagonal_keeps_the_corners(states):
+  """At 45 degrees an unpadded network cuts the corners off (Q = 0, whatever is there); padded,
+  a corner's Q reads that corner."""
+  color, depth = states
+  corner_changed = (color.at[:, :, :4, :4].set(1.0), depth.at[:, :, :4, :4].set(0.05))
+  eighth = jnp.full((BATCH, 1), ROTATIONS // 8)
+  for config, cut in ((TINY, True), (PADDED, False)):
+    state, forward = _forward(config)
+    q = np.asarray(forward(state, color, depth, eighth))[:, :, 0, 0, 0]
+    q_changed = np.asarray(forward(state, *corner_changed, eighth))[:, :, 0, 0, 0]
+    assert (q == 0).all() == cut
+    assert np.allclose(q, q_changed) == cut
+
+
+def _quarter_turn(x, rows):
+  """`x` turned as `rotate_images(x, pi / 2)` turns it (+x to +y), rows and cols at `rows`."""
+  return jnp.rot90(x, k=-1, axes=(rows, rows + 1))
+
+
+def test_padded_maps_turn_with_the_state(states):
+  """A quarter turn of the state turns the padded maps of the rotation a quarter further by a
+  quarter: the padding is cropped off centred, as it was added."""
+  color, depth = states
+  state, forward = _forward(PADDED)
+  k = jnp.full((BATCH, 1), ROTATIONS // 8)
+  q = np.asarray(forward(state, color, depth, k))
+  q_turned = np.asarray(forward(state, _quarter_turn(color, 2), _quarter_turn(depth, 2),
+                                k + ROTATIONS // 4))
+  np.testing.assert_allclose(q_turned, _quarter_turn(q, 3), atol=1e-4)
+
+
 def test_rotating_by_zero_is_identity():
   images = jax.random.uniform(jax.random.key(0), (2, 9, 9, 3))
   np.testing.assert_array_equal(rotate_images(images, 0.0), images)
