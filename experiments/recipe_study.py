@@ -41,6 +41,7 @@ VARIANTS = {
     'push_penalty': PAPER_TEXT + ['--set', 'train.no_change_push_reward=-1'],
     'occlusion': PAPER_TEXT + ['--set', 'env.occluded_share=0.25'],
     'nofresh_occlusion': NOFRESH + ['--set', 'env.occluded_share=0.25'],
+    'nofresh_pad': NOFRESH + ['--set', 'network.pad_to_diagonal=true'],
 }
 
 
