@@ -16,7 +16,7 @@ import pathlib
 import numpy as np
 from matplotlib.figure import Figure
 
-from mvcoba_jax import curves
+from mvcoba_jax.learner import curves
 
 
 def read(workdir: pathlib.Path) -> dict:

@@ -1,7 +1,7 @@
 """What finished evaluation runs cost the batch they wait in, per suite.
 
 `mvcoba-eval` steps every (case, run) pair of a suite in lockstep, so finished runs keep
-stepping until the batch moves the runs still going to a smaller one (`evaluation.evaluate`);
+stepping until the batch moves the runs still going to a smaller one (`runner.evaluate`);
 meanwhile they step on an emptied table (`Tabletop.emptied`). This times one lockstep action (the
 heuristic's primitive, then both cameras) of a batch holding every case of a suite once, settled
 as the evaluation starts them, against the same batch emptied, on the native backend; reads
@@ -26,8 +26,12 @@ import time
 import jax
 from physics import settings  # noqa: E402
 
-from mvcoba_jax import evaluation, runtime, task  # noqa: E402
+from mvcoba_jax import runtime  # noqa: E402
+
+from mvcoba_jax.evaluation import runner  # noqa: E402
+
 from mvcoba_jax.config import resolve  # noqa: E402
+from mvcoba_jax.learner import task  # noqa: E402
 from mvcoba_jax.policy import load  # noqa: E402
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
 from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
@@ -43,7 +47,7 @@ def step_cost(suite: str, repeats: int) -> dict:
   layouts = stack_layouts([case_to_layout(c, env) for c in cases])
   states, _ = jax.jit(lambda l, k: suite_cases.start(env, l, k))(
       layouts, jax.random.split(jax.random.PRNGKey(0), n))
-  policy = evaluation.heuristic_policy(config.env.num_rotations)
+  policy = runner.heuristic_policy(config.env.num_rotations)
 
   @jax.jit
   def action(states, key):
@@ -69,7 +73,7 @@ def whole_suite(suite: str, checkpoint: str, runs: int) -> dict:
   cases = [read_case(f) for f in suite_files([suite])[suite]]
   source = load(checkpoint)
   env = Tabletop(suite_cases.suite_config(source[0], suite_cases.pool_for(cases)))
-  policy, views = evaluation.make_policy(source, env.config)
+  policy, views = runner.make_policy(source, env.config)
   layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
   keys = jax.random.split(jax.random.PRNGKey(0), len(cases) * runs)
   n = len(cases) * runs
@@ -77,7 +81,7 @@ def whole_suite(suite: str, checkpoint: str, runs: int) -> dict:
   logs = {}
   for name, smallest in (('one_batch', n), ('smaller_batches', 8)):
     t = time.perf_counter()
-    logs[name] = evaluation.run_logs(evaluation.evaluate(env, policy, views, layouts, keys, 60,
+    logs[name] = runner.run_logs(runner.evaluate(env, policy, views, layouts, keys, 60,
                                                          smallest=smallest))
     row[f'{name}_s'] = time.perf_counter() - t  # compiles included: each batch size compiles
   row['smaller_over_one'] = row['smaller_batches_s'] / row['one_batch_s']

@@ -1,6 +1,6 @@
 """What the online test protocol costs against the frozen one (`mvcoba-eval --online`).
 
-For each suite, evaluates one policy frozen and online (`evaluation.OnlinePolicy`: every run
+For each suite, evaluates one policy frozen and online (`runner.OnlinePolicy`: every run
 takes one SGD step after each of its actions) with --runs per case and the 60-action cap, each
 twice in turn: the first call compiles (every batch size the runs move through), the second is
 timed warm. Online runs take other actions than frozen ones, so besides each suite's wall time
@@ -19,8 +19,10 @@ import time
 import jax
 from physics import settings  # noqa: E402
 
-from mvcoba_jax import evaluation, runtime  # noqa: E402
-from mvcoba_jax.metrics import case_metrics  # noqa: E402
+from mvcoba_jax import runtime  # noqa: E402
+
+from mvcoba_jax.evaluation import runner  # noqa: E402
+from mvcoba_jax.evaluation.metrics import case_metrics  # noqa: E402
 from mvcoba_jax.policy import load  # noqa: E402
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
 from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
@@ -35,10 +37,10 @@ def suite_costs(suite: str, source, runs: int) -> dict:
   keys = jax.random.split(jax.random.PRNGKey(0), len(cases) * runs)
   row = {'suite': suite, 'runs': len(cases) * runs}
   for protocol in ('frozen', 'online'):
-    policy, views = evaluation.make_policy(source, env.config, online=protocol == 'online')
+    policy, views = runner.make_policy(source, env.config, online=protocol == 'online')
     for timing in ('first_s', 'warm_s'):
       start = time.perf_counter()
-      logs = evaluation.run_logs(evaluation.evaluate(env, policy, views, layouts, keys, 60))
+      logs = runner.run_logs(runner.evaluate(env, policy, views, layouts, keys, 60))
       row[f'{protocol}_{timing}'] = time.perf_counter() - start
     actions = sum(log.actions for log in logs)
     row[f'{protocol}_actions'] = actions

@@ -20,9 +20,9 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 WORKER = """
 import json, sys, time
 import jax, jax.numpy as jnp
-from mvcoba_jax import sharding
 from mvcoba_jax.config import resolve
-from mvcoba_jax.training import Trainer
+from mvcoba_jax.learner import sharding
+from mvcoba_jax.learner.training import Trainer
 config = resolve(sys.argv[1])
 iterations = int(sys.argv[2])
 mesh = sharding.mesh()

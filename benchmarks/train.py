@@ -25,9 +25,9 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 from physics import timed  # noqa: E402
 
-from mvcoba_jax import agent  # noqa: E402
 from mvcoba_jax import config as config_lib  # noqa: E402
-from mvcoba_jax.training import Trainer  # noqa: E402
+from mvcoba_jax.learner import agent  # noqa: E402
+from mvcoba_jax.learner.training import Trainer  # noqa: E402
 
 
 def bench(config, batch: int, target: str, backend: str, repeats: int) -> dict:

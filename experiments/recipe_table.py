@@ -16,7 +16,7 @@ import statistics
 
 from recipe_study import ROOT, VARIANTS
 
-from mvcoba_jax import report
+from mvcoba_jax.evaluation import report
 
 METRICS = ('grasp_success', 'completion', 'objects_picked')
 

@@ -22,21 +22,25 @@ from tensorboardX import SummaryWriter
 from tqdm import tqdm
 
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import evaluation, folders, paper, runtime, sharding, video, viz
-from mvcoba_jax import report as report_lib
-from mvcoba_jax.checkpoint import CheckpointError, Checkpoints, holds_checkpoint, latest_step
+from mvcoba_jax import folders, runtime, video, viz
 from mvcoba_jax.config import Config
+from mvcoba_jax.evaluation import paper, runner
+from mvcoba_jax.evaluation import report as report_lib
+from mvcoba_jax.learner import sharding
+from mvcoba_jax.learner.checkpoint import (CheckpointError, Checkpoints, holds_checkpoint,
+                                           latest_step)
+from mvcoba_jax.learner.run_log import (action_records, plot_curves, plot_sweep, read_records,
+                                        summary, write_records)
+from mvcoba_jax.learner.training import Trainer
 from mvcoba_jax.policy import PolicyError, fingerprint
 from mvcoba_jax.policy import load as load_policy
-from mvcoba_jax.run_log import (action_records, plot_curves, plot_sweep, read_records, summary,
-                                write_records)
 from mvcoba_jax.sim.scenarios import (MAX_FIT_BOUND, ScenarioError, case_to_layout, read_case,
                                       stack_layouts)
 from mvcoba_jax.sim.shapes import BLOCK_TABLES
 from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites import cases as suite_cases
 from mvcoba_jax.suites import suite_files
-from mvcoba_jax.training import Trainer
+
 
 __all__ = ['EvaluationError', 'RESULT_FILES', 'RUN_FILES', 'TrainError', 'TrainResult',
            'evaluate', 'join_evaluations', 'load_policy', 'sweep', 'sweep_runs', 'train']
@@ -371,7 +375,7 @@ def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, ru
     trained = [(config_lib.trained_as(c), c.seed) for c, _, _ in loaded] + [(None, None)]
     sources = [(config_lib.evaluated(c, overrides), model, step) for c, model, step in loaded]
     sources += [baseline] if baseline else []
-    names = [evaluation.source_name(s) for s in sources]
+    names = [runner.source_name(s) for s in sources]
     labels = (report_lib.row_labels(checkpoints, names[:len(checkpoints)])
               + names[len(checkpoints):])
     if protocol != 'frozen':
@@ -456,7 +460,7 @@ def _row(suite, cases, label, source, base, protocol, runs, max_actions, seed, o
   config = base if isinstance(source, str) else source[0]
   env = Tabletop(suite_cases.suite_config(config, suite_cases.pool_for(cases)),
                  frames=video.FRAMES_PER_PRIMITIVE if video_too else 0)
-  policy, views = evaluation.make_policy(source, env.config, protocol == 'online',
+  policy, views = runner.make_policy(source, env.config, protocol == 'online',
                                          protocol == 'no-repeat')
   layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
   keys = jax.random.split(jax.random.PRNGKey(seed), len(cases) * runs)
@@ -467,9 +471,9 @@ def _row(suite, cases, label, source, base, protocol, runs, max_actions, seed, o
     def progress(done, finished, bar=bar, n=len(layouts.in_play)):
       bar.set_postfix_str(f'{int(finished)}/{n} runs finished', refresh=False)
       bar.update(int(done) - bar.n)
-    result = evaluation.evaluate(env, policy, views, layouts, keys, max_actions,
+    result = runner.evaluate(env, policy, views, layouts, keys, max_actions,
                                  record=save_visuals or video_too, progress=progress)
-    logs = evaluation.run_logs(result)
+    logs = runner.run_logs(result)
   names = [c.name for c in cases]
   run_names = [f'{n}_run{r}' for n in names for r in range(runs)]
   where = pathlib.Path(pathlib.Path(suite).name) / label.replace(':', '_')
@@ -480,7 +484,7 @@ def _row(suite, cases, label, source, base, protocol, runs, max_actions, seed, o
   if save_visuals:
     folder = out / 'visuals' / where
     viz.write_run_strips(jax.device_get(result.trace), run_names, folder, env.config)
-    lost = evaluation.losses(result.trace, run_names, env.config)
+    lost = runner.losses(result.trace, run_names, env.config)
     (folder / 'losses.json').write_text(json.dumps(lost, indent=1))
     say(f'  visuals in {folder}; {report_lib.loss_summary(lost)}', flush=True)
   by_case = {name: logs[i * runs:(i + 1) * runs] for i, name in enumerate(names)}

@@ -21,9 +21,11 @@ import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
-from mvcoba_jax import agent, methods, networks, perception
+from mvcoba_jax import methods, perception
+
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Config
+from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.policy import FORMAT, PolicyError, flat_params, load
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.sim.primitives import GRASP, PUSH

@@ -14,9 +14,9 @@ import numpy as np
 from flax import nnx
 
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import networks
-from mvcoba_jax.checkpoint import CheckpointError, Checkpoints, incompatibilities
 from mvcoba_jax.config import Config
+from mvcoba_jax.learner import networks
+from mvcoba_jax.learner.checkpoint import CheckpointError, Checkpoints, incompatibilities
 
 FORMAT = 'mvcoba-jax-export/1'
 

@@ -15,10 +15,12 @@ import pathlib
 import shutil
 import time
 
-from mvcoba_jax import api, folders, paper
+from mvcoba_jax import api, folders
+
 from mvcoba_jax.config import Config, ConfigError, validate
-from mvcoba_jax.checkpoint import holds_checkpoint
-from mvcoba_jax.report import write_whole
+from mvcoba_jax.evaluation import paper
+from mvcoba_jax.evaluation.report import write_whole
+from mvcoba_jax.learner.checkpoint import holds_checkpoint
 from mvcoba_jax.sim.scenarios import ScenarioError
 from mvcoba_jax.suites import suite_files
 

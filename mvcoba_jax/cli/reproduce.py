@@ -20,9 +20,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from mvcoba_jax import api, methods, paper
+from mvcoba_jax import api, methods
+
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.cli import fail
+from mvcoba_jax.evaluation import paper
 from mvcoba_jax.reproduction import PROTOCOLS, reproduce
 from mvcoba_jax.suites import SUITES
 

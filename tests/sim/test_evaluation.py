@@ -8,9 +8,13 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from mvcoba_jax import agent, evaluation, methods, metrics, perception, video, viz
+from mvcoba_jax import methods, perception, video, viz
+
+from mvcoba_jax.evaluation import metrics, runner
+
 from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.config import resolve
+from mvcoba_jax.learner import agent
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts
 from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites import SUITES_DIR
@@ -31,8 +35,8 @@ def setup(tmp_path_factory):
   config = resolve('tiny')
   cases = [read_case(folder / name) for name in CASES]
   env = Tabletop(suite_cases.suite_config(config, suite_cases.pool_for(cases)))
-  policy = evaluation.heuristic_policy(config.env.num_rotations)
-  run = lambda l, k: evaluation.evaluate(env, policy, (0, 1), l, k, MAX_ACTIONS)
+  policy = runner.heuristic_policy(config.env.num_rotations)
+  run = lambda l, k: runner.evaluate(env, policy, (0, 1), l, k, MAX_ACTIONS)
   layouts = stack_layouts([case_to_layout(c, env) for c in cases])
   keys = jax.random.split(jax.random.PRNGKey(0), len(cases))
   return folder, env, run, layouts, keys, run(layouts, keys)
@@ -40,7 +44,7 @@ def setup(tmp_path_factory):
 
 def test_cases_are_run_and_scored(setup):
   _, _, _, _, _, runs = setup
-  logs = evaluation.run_logs(runs)
+  logs = runner.run_logs(runs)
   assert [r.objects for r in logs] == [2, 3]
   for r in logs:
     assert 1 <= r.actions <= MAX_ACTIONS
@@ -81,7 +85,7 @@ def test_a_run_that_finished_early_leaves_the_others_as_they_were_alone(setup, o
   one, three = one_and_three
   together = run(stack_layouts([one, three]), keys)
   alone = run(jax.tree.map(lambda x: jnp.stack([x] * 2), three), jnp.stack([keys[1]] * 2))
-  first, second = evaluation.run_logs(together)
+  first, second = runner.run_logs(together)
   assert first.completed and first.actions < second.actions == MAX_ACTIONS
   for a, b in zip(jax.tree.leaves(alone), jax.tree.leaves(together)):
     assert (np.asarray(a)[1] == np.asarray(b)[1]).all()
@@ -95,11 +99,11 @@ def test_runs_moved_to_a_smaller_batch_end_as_in_the_whole_batch(setup, one_and_
   one, three = one_and_three
   four = stack_layouts([one, one, one, three])
   keys = jax.random.split(jax.random.PRNGKey(3), 4)
-  policy = evaluation.heuristic_policy(env.config.env.num_rotations)
-  run = lambda smallest: evaluation.evaluate(env, policy, (0, 1), four, keys, MAX_ACTIONS,
+  policy = runner.heuristic_policy(env.config.env.num_rotations)
+  run = lambda smallest: runner.evaluate(env, policy, (0, 1), four, keys, MAX_ACTIONS,
                                              record=True, smallest=smallest)
   whole, moved = run(smallest=4), run(smallest=1)
-  assert sum(r.actions < MAX_ACTIONS for r in evaluation.run_logs(moved)) >= 2
+  assert sum(r.actions < MAX_ACTIONS for r in runner.run_logs(moved)) >= 2
   for a, b in zip(jax.tree.leaves(whole.replace(trace=None)),
                   jax.tree.leaves(moved.replace(trace=None))):
     assert (np.asarray(a) == np.asarray(b)).all()
@@ -235,7 +239,7 @@ def test_run_strip_draws_each_action_where_it_was_taken():
   config = resolve('tiny')
   r, scale = 56, 3
   steps = lambda *v: np.array([v])
-  trace = evaluation.Trace(
+  trace = runner.Trace(
       color=np.zeros((1, 3, 2, r, r, 3), np.uint8), object_xyz=np.zeros((1, 3, 1, 3)),
       left_workspace=np.zeros((1, 3, 1), bool), primitive=steps(1, 1, 0),
       rotation=steps(0, 0, 0), row=steps(10, 30, 40), col=steps(20, 30, 10),
@@ -316,12 +320,12 @@ def test_losses_name_the_action_and_where_the_object_was():
   left = np.zeros((1, 3, 2), bool)
   left[0, 1, 1] = left[0, 2, 0] = True
   r = perception.grid_size(config)
-  trace = evaluation.Trace(
+  trace = runner.Trace(
       color=np.zeros((1, 3, 2, r, r, 3), np.uint8), object_xyz=xyz, left_workspace=left,
       primitive=steps(1, 0, 1), rotation=steps(0, 0, 0), row=steps(0, r // 2, 0),
       col=steps(0, r // 2, 0), grasp_success=steps(True, False, False),
       active=steps(True, True, False))
-  (record,) = evaluation.losses(trace, ['c_run0'], config)
+  (record,) = runner.losses(trace, ['c_run0'], config)
   half = config.perception.heightmap_resolution / 2  # the centre of cell (r/2, r/2)
   assert record['run'] == 'c_run0' and record['action'] == 1 and record['slot'] == 1
   assert record['primitive'] == 'push' and not record['grasp_success']
@@ -350,13 +354,13 @@ def test_repeated_failed_actions_are_counted_per_run(setup):
   zeros = lambda obs: jnp.zeros(obs.depth.shape[0], jnp.int32)
   stubborn = lambda obs, changed, keys, failed: agent.PixelAction(
       primitive=zeros(obs) + agent.GRASP, rotation=zeros(obs), row=zeros(obs), col=zeros(obs))
-  runs = evaluation.evaluate(env, stubborn, (0, 1), layouts, keys, 10)
-  logs = evaluation.run_logs(runs)
+  runs = runner.evaluate(env, stubborn, (0, 1), layouts, keys, 10)
+  logs = runner.run_logs(runs)
   attempts = env.config.env.max_failures + 1
   assert [r.actions for r in logs] == [attempts] * 2
   assert [r.repeated_failures for r in logs] == [attempts - 1] * 2
   assert metrics.case_metrics(logs)['repeated_failures'] == attempts - 1
-  assert all(r.repeated_failures == 0 for r in evaluation.run_logs(heuristic))
+  assert all(r.repeated_failures == 0 for r in runner.run_logs(heuristic))
 
 
 @pytest.fixture(scope='module')
@@ -364,11 +368,11 @@ def online(setup):
   """An untrained network's online policy on the setup's cases."""
   from flax import nnx
 
-  from mvcoba_jax import networks
+  from mvcoba_jax.learner import networks
   _, env, _, layouts, keys, _ = setup
   model = networks.build_network(env.config.network, env.config.env.num_rotations, nnx.Rngs(0))
-  policy, views = evaluation.make_policy((env.config, model, 0), env.config, online=True)
-  run = lambda l, k, cap: evaluation.evaluate(env, policy, views, l, k, cap)
+  policy, views = runner.make_policy((env.config, model, 0), env.config, online=True)
+  run = lambda l, k, cap: runner.evaluate(env, policy, views, l, k, cap)
   return policy, run, layouts, keys
 
 
@@ -396,7 +400,7 @@ def test_a_finished_run_learns_no_more(online):
   policy, run, layouts, keys = online
   empty = layouts.replace(in_play=layouts.in_play.at[0].set(False))
   short, long = run(empty, keys, 3), run(empty, keys, 6)
-  assert [r.actions for r in evaluation.run_logs(short)] == [1, 3]
+  assert [r.actions for r in runner.run_logs(short)] == [1, 3]
   params = lambda runs, i: [np.asarray(x)[i] for x in jax.tree.leaves(runs.learner.params)]
   start = [np.asarray(x) for x in jax.tree.leaves(policy.params)]
   for runs in (short, long):
@@ -414,8 +418,8 @@ def test_no_repeat_takes_the_next_best_action_instead_of_a_failed_one(setup):
   q_maps = lambda obs: jnp.broadcast_to(ramp, (obs.depth.shape[0], 2, 1, r, r))
   logs = {}
   for no_repeat in (False, True):
-    policy = evaluation.greedy_policy(q_maps, methods.get('grasp_only'), env.config, no_repeat)
-    logs[no_repeat] = evaluation.run_logs(evaluation.evaluate(env, policy, (0, 1), layouts,
+    policy = runner.greedy_policy(q_maps, methods.get('grasp_only'), env.config, no_repeat)
+    logs[no_repeat] = runner.run_logs(runner.evaluate(env, policy, (0, 1), layouts,
                                                               keys, 10))
   attempts = env.config.env.max_failures + 1
   assert [(g.actions, g.repeated_failures) for g in logs[False]] == [(attempts, attempts - 1)] * 2

@@ -14,13 +14,15 @@ import numpy as np
 import pytest
 from flax import nnx
 
-from mvcoba_jax import agent, export, methods, perception, policy
-from mvcoba_jax.checkpoint import Checkpoints
+from mvcoba_jax import export, methods, perception, policy
+
 from mvcoba_jax.cli import export as export_cli
 from mvcoba_jax.cli import viz as viz_cli
 from mvcoba_jax.config import ConfigError, defaulted, from_dict, resolve, to_dict
+from mvcoba_jax.learner import agent
+from mvcoba_jax.learner.checkpoint import Checkpoints
+from mvcoba_jax.learner.training import Trainer
 from mvcoba_jax.methods import names as method_names
-from mvcoba_jax.training import Trainer
 from tests.helpers import layout, stack
 
 ort = pytest.importorskip('onnxruntime')

@@ -4,7 +4,9 @@ import jax
 import numpy as np
 import pytest
 
-from mvcoba_jax import networks, perception
+from mvcoba_jax import perception
+
+from mvcoba_jax.learner import networks
 from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.geometry import pixel_to_world
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case

@@ -16,9 +16,9 @@ SCRIPT = """
 import jax, jax.numpy as jnp, numpy as np
 from mvcoba_jax import runtime
 runtime.setup()
-from mvcoba_jax import sharding
 from mvcoba_jax.config import resolve
-from mvcoba_jax.training import Trainer
+from mvcoba_jax.learner import sharding
+from mvcoba_jax.learner.training import Trainer
 assert len(jax.devices()) == 2, jax.devices()
 config = resolve('tiny', ['train.steps_per_iteration=2'])  # the replay fills from step 2
 trainer, sharded = Trainer(config), Trainer(config, sharding.mesh())

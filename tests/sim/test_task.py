@@ -4,9 +4,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from mvcoba_jax import agent, task
 from mvcoba_jax.config import resolve
-from mvcoba_jax.agent import PixelAction
+from mvcoba_jax.learner import agent, task
+from mvcoba_jax.learner.agent import PixelAction
 from mvcoba_jax.sim.geometry import world_to_pixel
 from mvcoba_jax.sim.primitives import GRASP, PUSH
 from tests.helpers import layout, make_env, stack

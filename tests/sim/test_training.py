@@ -12,14 +12,14 @@ import numpy as np
 import pytest
 
 import mvcoba_jax
-from mvcoba_jax import agent, networks
-from mvcoba_jax import replay as replay_lib
-from mvcoba_jax.checkpoint import Checkpoints
 from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.cli import reproduce as reproduce_cli
 from mvcoba_jax.cli import train as train_cli
 from mvcoba_jax.config import resolve
-from mvcoba_jax.training import Trainer
+from mvcoba_jax.learner import agent, networks
+from mvcoba_jax.learner import replay as replay_lib
+from mvcoba_jax.learner.checkpoint import Checkpoints
+from mvcoba_jax.learner.training import Trainer
 
 TINY = 'tiny'
 
@@ -62,7 +62,7 @@ def test_training_steps_fill_the_replay_and_update(trainer, trained):
 def test_checkpoint_names_keep_the_task_fields_where_earlier_runs_saved_them(trained):
   """The task state (`TrainState.task`) is saved under the names its fields had at the top of
   the training state, so a run checkpointed before it existed resumes."""
-  from mvcoba_jax.checkpoint import _leaves
+  from mvcoba_jax.learner.checkpoint import _leaves
   names = set(_leaves(trained[0]))
   assert {'env.sim.qpos', 'obs.depth', 'changed', 'failures'} <= names
   assert not any(name.startswith('task.') for name in names)

@@ -3,7 +3,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from mvcoba_jax import agent, methods
+from mvcoba_jax import methods
+
+from mvcoba_jax.learner import agent
 
 MVCOBA = methods.get('mvcoba')
 

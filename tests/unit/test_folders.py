@@ -87,7 +87,7 @@ def test_a_results_file_that_cannot_be_written_leaves_the_earlier_one(tmp_path):
   the earlier file is as it was."""
   (tmp_path / 'results.json').write_text('{"earlier": 1}')
   code = ('import resource, signal, pathlib\n'
-          'from mvcoba_jax import report\n'
+          'from mvcoba_jax.evaluation import report\n'
           'signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n'
           'resource.setrlimit(resource.RLIMIT_FSIZE, (64, 64))\n'
           'try:\n'

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from mvcoba_jax import intervals, report
+from mvcoba_jax.evaluation import intervals, report
 
 
 def test_two_seeds_that_disagree_in_every_case():
@@ -50,7 +50,7 @@ def test_report_gives_intervals_for_methods_evaluated_from_several_seeds():
 
 
 def test_starts_give_every_case_its_objects_in_play_beside_its_files_count():
-  from mvcoba_jax.metrics import RunLog
+  from mvcoba_jax.evaluation.metrics import RunLog
   log = lambda objects: RunLog(actions=5, grasp_attempts=5, grasp_successes=4, objects=objects,
                                picked=4, lost=0, completed=False)
   assert report.starts({'a': [log(6), log(6)], 'b': [log(31), log(32)]}, {'a': 6, 'b': 32}) == (
@@ -63,7 +63,7 @@ def test_resumed_evaluation_keeps_only_rows_with_the_same_settings(tmp_path):
   import dataclasses
   import json
 
-  from mvcoba_jax.metrics import RunLog
+  from mvcoba_jax.evaluation.metrics import RunLog
   runs = {'a': [dataclasses.asdict(RunLog(actions=4, grasp_attempts=3, grasp_successes=0,
                                           objects=2, picked=0, lost=0, completed=False))]}
   settings = {'checkpoint': 'runs/x', 'step': 8, 'params': 'ab12', 'cases': ['a'], 'runs': 1,
@@ -86,7 +86,7 @@ def test_resumed_evaluation_keeps_only_rows_with_the_same_settings(tmp_path):
 
 
 def test_separations_name_only_the_pairs_whose_intervals_are_disjoint():
-  from mvcoba_jax import paper
+  from mvcoba_jax.evaluation import paper
   ours = {'mvcoba': {'grasp_success': (80.0, 75.0, 85.0), 'completion': (50.0, 20.0, 80.0)},
           'vpg': {'grasp_success': (60.0, 55.0, 65.0), 'completion': (40.0, 10.0, 70.0)},
           'grasp_only': {'grasp_success': (70.0, 62.0, 78.0), 'completion': None}}
@@ -125,7 +125,7 @@ def test_intervals_pool_only_seeds_of_one_training_config():
   over = report.seed_intervals(rows)
   assert list(over) == ['mvcoba', 'mvcoba {train.gamma=0.2}']
   assert over['mvcoba {train.gamma=0.2}']['grasp_success'][0] == pytest.approx(91.5)
-  from mvcoba_jax import paper
+  from mvcoba_jax.evaluation import paper
   text = paper.comparisons({'ordered': rows})
   assert '| MV-COBA (mvcoba {train.gamma=0.2}) | 2 | 91.5 [' in text and '| 86.3 |' in text
   assert 'MV-COBA {train.gamma=0.2} > MV-COBA' in text

@@ -1,4 +1,5 @@
-"""The package's shape: the simulator imports nothing above it, no module imports itself back,
+"""The package's shape: the simulator imports nothing above it, the learner nothing of evaluation
+or of the commands, evaluation nothing of the commands, no module imports itself back,
 importing changes nothing in the process, and the built wheel carries presets, suites and the
 command-line entry points."""
 import ast
@@ -39,6 +40,23 @@ def test_simulator_imports_nothing_above_it():
   outside = {m: sorted(d for d in deps if not d.startswith('mvcoba_jax.sim'))
              for m, deps in _imports().items() if m.startswith('mvcoba_jax.sim')}
   assert not any(outside.values()), outside
+
+
+# group -> the modules above it, which it must not import
+ABOVE = {
+    'mvcoba_jax.learner': ('mvcoba_jax.evaluation', 'mvcoba_jax.api', 'mvcoba_jax.cli',
+                           'mvcoba_jax.reproduction', 'mvcoba_jax.policy', 'mvcoba_jax.export'),
+    'mvcoba_jax.evaluation': ('mvcoba_jax.api', 'mvcoba_jax.cli', 'mvcoba_jax.reproduction'),
+}
+
+
+def test_groups_import_nothing_above_them():
+  graph = _imports()
+  assert any(m.startswith('mvcoba_jax.learner.') for m in graph)
+  assert any(m.startswith('mvcoba_jax.evaluation.') for m in graph)
+  wrong = {m: sorted(d for d in deps if d.startswith(ABOVE[group]))
+           for group in ABOVE for m, deps in graph.items() if m.startswith(group)}
+  assert not any(wrong.values()), wrong
 
 
 def test_no_import_cycles():

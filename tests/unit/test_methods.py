@@ -5,8 +5,10 @@ import numpy as np
 import pytest
 from flax import nnx
 
-from mvcoba_jax import agent, export, methods, networks
+from mvcoba_jax import export, methods
+
 from mvcoba_jax.config import NetworkConfig, resolve
+from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.sim.primitives import GRASP, PUSH
 
 

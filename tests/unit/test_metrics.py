@@ -1,7 +1,7 @@
 """The evaluation metrics on hand-made run logs, against hand-computed values."""
 import math
 
-from mvcoba_jax.metrics import RunLog, case_metrics, suite_average
+from mvcoba_jax.evaluation.metrics import RunLog, case_metrics, suite_average
 
 
 def test_case_metrics_by_hand():

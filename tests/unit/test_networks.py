@@ -9,8 +9,10 @@ import optax
 import pytest
 from flax import nnx
 
-from mvcoba_jax import methods, networks
+from mvcoba_jax import methods
+
 from mvcoba_jax.config import NetworkConfig
+from mvcoba_jax.learner import networks
 from mvcoba_jax.methods import names as method_names
 from mvcoba_jax.sim import primitives
 from mvcoba_jax.sim.geometry import rotate_images

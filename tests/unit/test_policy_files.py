@@ -10,10 +10,10 @@ import pytest
 from flax import nnx
 
 from mvcoba_jax import export, policy
-from mvcoba_jax.checkpoint import Checkpoints
 from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.config import resolve, to_dict
-from mvcoba_jax.training import Trainer
+from mvcoba_jax.learner.checkpoint import Checkpoints
+from mvcoba_jax.learner.training import Trainer
 
 
 @pytest.fixture(scope='module')
@@ -142,7 +142,7 @@ def test_eval_cli_names_the_damaged_file_in_one_line(saved, tmp_path, capsys):
 def test_checkpoint_of_another_state_structure_is_refused(tmp_path):
   """Leaves are saved by tree path: a state whose fields changed cannot be filled from a
   checkpoint with another field's values of the same shape."""
-  from mvcoba_jax.checkpoint import CheckpointError
+  from mvcoba_jax.learner.checkpoint import CheckpointError
   config = resolve('tiny')
   saved = {'replay': {'size': jnp.int32(3)}, 'actions': jnp.int32(8)}
   Checkpoints(tmp_path).save(8, saved, {'config': to_dict(config)})

@@ -4,7 +4,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from mvcoba_jax import replay as rp
+from mvcoba_jax.learner import replay as rp
 from mvcoba_jax.perception import Observation
 
 VIEWS, SIDE = 2, 4

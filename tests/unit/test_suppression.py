@@ -4,8 +4,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from mvcoba_jax import agent, methods, networks, suppression
+from mvcoba_jax import methods
+
 from mvcoba_jax.config import resolve
+from mvcoba_jax.learner import agent, networks, suppression
 from mvcoba_jax.sim.primitives import GRASP, PUSH
 
 RES, SIDE, K = 0.004, 112, 16

@@ -14,9 +14,11 @@ import optax
 from flax import nnx, struct
 from jax.sharding import Mesh, PartitionSpec
 
-from mvcoba_jax import agent, methods, networks, perception, task
-from mvcoba_jax import replay as replay_lib
+from mvcoba_jax import methods, perception
+
 from mvcoba_jax.config import Config
+from mvcoba_jax.learner import agent, networks, task
+from mvcoba_jax.learner import replay as replay_lib
 from mvcoba_jax.sim import reserve as reserve_lib
 from mvcoba_jax.sim.tabletop import Tabletop, where_envs
 
@@ -122,8 +124,8 @@ class Trainer:
                                     available=jnp.int32(2 * b)),
         params=params, target_params=params, opt_state=self.optimizer.init(params),
         replay=replay_lib.Replay.create(self.config.train.replay_capacity, example),
-        pending=pending, pending_valid=jnp.bool_(False), key=key, actions=jnp.int32(0), updates=jnp.int32(0), skipped_updates=jnp.int32(0),
-        episodes=jnp.int32(0))
+        pending=pending, pending_valid=jnp.bool_(False), key=key, actions=jnp.int32(0),
+        updates=jnp.int32(0), skipped_updates=jnp.int32(0), episodes=jnp.int32(0))
 
   # ---------------------------------------------------------------- learning
   def loss(self, params, target_params, batch, valid):

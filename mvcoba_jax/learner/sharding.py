@@ -13,7 +13,7 @@ import jax
 import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
-from mvcoba_jax.training import TrainState
+from mvcoba_jax.learner.training import TrainState
 
 
 def mesh(devices=None) -> Mesh:

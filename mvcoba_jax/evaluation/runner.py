@@ -20,10 +20,12 @@ import numpy as np
 import optax
 from flax import nnx, struct
 
-from mvcoba_jax import agent, methods, networks, perception, task
-from mvcoba_jax import replay as replay_lib
+from mvcoba_jax import methods, perception
+
 from mvcoba_jax.config import Config
-from mvcoba_jax.metrics import RunLog
+from mvcoba_jax.evaluation.metrics import RunLog
+from mvcoba_jax.learner import agent, networks, task
+from mvcoba_jax.learner import replay as replay_lib
 from mvcoba_jax.sim.geometry import pixel_to_world
 from mvcoba_jax.sim.tabletop import Layout, Tabletop, where_envs
 from mvcoba_jax.suites.cases import start

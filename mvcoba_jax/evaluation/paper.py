@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from mvcoba_jax import intervals, report
+from mvcoba_jax.evaluation import intervals, report
 
 # Our method -> the paper's name for it (grasp-only stands for its DRGP).
 PAPER_NAMES = {'mvcoba': 'MV-COBA', 'mvcoba_2fcn': 'MV-COBA-2FCNs', 'vpg': 'VPG',

@@ -19,7 +19,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from mvcoba_jax.networks import NO_ACTION
+from mvcoba_jax.learner.networks import NO_ACTION
 from mvcoba_jax.sim.geometry import rotate_images, rotation_angle
 from mvcoba_jax.sim.scene import FINGER_HALF, MAX_OPENING
 

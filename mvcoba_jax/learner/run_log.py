@@ -9,7 +9,7 @@ import jax
 import numpy as np
 from jax.experimental import multihost_utils
 
-from mvcoba_jax import curves
+from mvcoba_jax.learner import curves
 
 PRIMITIVE_NAMES = ('push', 'grasp')
 

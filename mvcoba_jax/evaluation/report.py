@@ -10,7 +10,7 @@ import pathlib
 
 import numpy as np
 
-from mvcoba_jax import intervals, metrics
+from mvcoba_jax.evaluation import intervals, metrics
 
 METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action efficiency (%)'),
            ('completion', 'completion (%)'), ('objects_picked', 'objects picked (%)'),
