@@ -42,6 +42,7 @@ VARIANTS = {
     'occlusion': PAPER_TEXT + ['--set', 'env.occluded_share=0.25'],
     'nofresh_occlusion': NOFRESH + ['--set', 'env.occluded_share=0.25'],
     'nofresh_pad': NOFRESH + ['--set', 'network.pad_to_diagonal=true'],
+    'nofresh_shared2': NOFRESH + ['--set', 'network.shared_stages=2'],
 }
 
 

@@ -63,12 +63,24 @@ class NetworkConfig:
   # turn cuts a corner off; costs about 2x the forward. (Their other input change, a 2x zoom,
   # is `stem_patch` halved: a patch over a nearest-neighbour zoom is a patch half the size.)
   pad_to_diagonal: bool = False
+  # Stages run once per state before the turn (small trunk): 0 turns the heightmaps and runs the
+  # whole FCN per rotation; 1 runs the streams once and turns their feature maps; n > 1 also the
+  # trunk's first n - 1 blocks. At least one block runs per rotation, or every turn would score
+  # alike. Each FCN's maps are then turned back at the stem's resolution and upsampled.
+  shared_stages: int = 0
 
   def __post_init__(self):
     check(self, 'network.', {'trunk': TRUNKS, 'stem_patch': Between(1, 16),
+                             'shared_stages': Between(0, 16),
                              'features': Between(1, 4096), 'groups': Between(1, 512)})
     if not self.features:
       raise ConfigError('network.features: at least one stage')
+    if self.shared_stages and self.trunk != 'small':
+      raise ConfigError(f'network.shared_stages={self.shared_stages} needs network.trunk=small')
+    if self.shared_stages >= len(self.features):
+      raise ConfigError(f'network.shared_stages={self.shared_stages}: at most '
+                        f'{len(self.features) - 1} with network.features={self.features} (one '
+                        'block at least runs per rotation)')
 
 
 @dataclasses.dataclass(frozen=True)
@@ -389,7 +401,7 @@ LEGACY = {TrainConfig: {'target': 'network', 'failed_grasp_reward': 0.5,
                         'no_change_push_reward': 0.0, 'bootstrap_no_change': True,
                         'future_max': 'rule', 'grasp_symmetry': False, 'fresh_in_batch': False},
           EnvConfig: {'drop': 'spread', 'heap_half': 0.125, 'occluded_share': 0.0},
-          NetworkConfig: {'pad_to_diagonal': False}}
+          NetworkConfig: {'pad_to_diagonal': False, 'shared_stages': 0}}
 
 # Fields that choose where a run computes, not what it computes: a saved config that lacks them
 # (written before they existed) runs on this machine's choice without a warning.

@@ -90,8 +90,8 @@ class SmallTrunk(nnx.Module):
     self.blocks = nnx.List(blocks)
     self.out_features = cin
 
-  def __call__(self, x):
-    for block in self.blocks:
+  def __call__(self, x, start: int = 0, stop: int | None = None):
+    for block in self.blocks[start:stop]:
       x = block(x)
     return x
 
@@ -139,8 +139,8 @@ class DenseTrunk(nnx.Module):
     self.layers = nnx.List(layers)
     self.out_features = cin
 
-  def __call__(self, x):
-    for layer in self.layers:
+  def __call__(self, x, start: int = 0, stop: int | None = None):
+    for layer in self.layers[start:stop]:
       x = layer(x)
     return x
 
@@ -164,17 +164,29 @@ class FCN(nnx.Module):
     self.head_hidden = nnx.Conv(cout, config.features[-1], (1, 1), rngs=rngs)
     self.head_out = nnx.Conv(config.features[-1], outputs, (1, 1), rngs=rngs)
 
-  def __call__(self, inputs: dict[int, jnp.ndarray]):
-    """`inputs`: view -> (N, R, R, 4) normalised colour + depth; returns (N, R, R, outputs)."""
+  def encode(self, inputs: dict[int, jnp.ndarray], blocks: int = 0):
+    """`inputs`: view -> (N, R, R, 4) normalised colour + depth; the streams, fused, through the
+    trunk's first `blocks` blocks: (N, r, r, C) at the stem's resolution."""
     features = []
     for v, color, depth in zip(self.views, self.color, self.depth):
       features += [color(inputs[v][..., :3]), depth(inputs[v][..., 3:])]
-    x = self.trunk(jnp.concatenate(features, axis=-1))
-    x = self.head_hidden(nnx.relu(self.head_norm(x)))
-    x = self.head_out(nnx.relu(x))
-    n, side = x.shape[0], inputs[self.views[0]].shape[1]
-    # Always an enlargement, where antialiasing does nothing; stated, as ONNX's Resize needs it.
-    return jax.image.resize(x, (n, side, side, x.shape[-1]), 'bilinear', antialias=False)
+    return self.trunk(jnp.concatenate(features, axis=-1), 0, blocks)
+
+  def decode(self, x, blocks: int = 0):
+    """The trunk after its first `blocks` blocks and the head: (N, r, r, outputs)."""
+    x = self.head_hidden(nnx.relu(self.head_norm(self.trunk(x, blocks))))
+    return self.head_out(nnx.relu(x))
+
+  def __call__(self, inputs: dict[int, jnp.ndarray]):
+    """`inputs` as `encode`'s; returns (N, R, R, outputs)."""
+    return upsample(self.decode(self.encode(inputs)), inputs[self.views[0]].shape[1])
+
+
+def upsample(maps, side: int):
+  """(N, r, r, C) maps at the stem's resolution -> (N, side, side, C), bilinear."""
+  # Always an enlargement, where antialiasing does nothing; stated, as ONNX's Resize needs it.
+  return jax.image.resize(maps, maps.shape[:1] + (side, side) + maps.shape[3:], 'bilinear',
+                          antialias=False)
 
 
 def diagonal_padding(side: int, stride: int) -> int:
@@ -219,6 +231,7 @@ class QNetwork(nnx.Module):
     self.num_rotations = num_rotations
     stride = 32 if config.trunk == 'densenet121' else config.stem_patch
     self.pad_stride = stride if config.pad_to_diagonal else 0
+    self.shared_stages = config.shared_stages
     self.views = method.views
     self.fuse = method.fuse
     self.streams = (0,) if self.fuse else self.views  # the inputs each FCN reads, by view
@@ -238,20 +251,48 @@ class QNetwork(nnx.Module):
     if self.fuse:
       color, depth = fuse_views(color, depth)
     x = jnp.concatenate([color, depth[..., None]], axis=-1)  # (B, U, R, R, 4)
-    x = jnp.moveaxis(x, 1, -2).reshape(b, 1, side, side, -1)
-    x = jnp.broadcast_to(x, (b, k) + x.shape[2:]).reshape((b * k,) + x.shape[2:])
-    pad = diagonal_padding(side, self.pad_stride)
-    x = jnp.pad(x, ((0, 0), (pad, pad), (pad, pad), (0, 0)))
+    x = jnp.moveaxis(x, 1, -2).reshape(b, side, side, -1)
     angle = rotation_angle(rotations.reshape(-1), self.num_rotations)
-    x = _normalise(rotate_images(x, -angle).reshape(x.shape[:3] + (len(self.streams), 4)))
-    inputs = {v: x[..., i, :] for i, v in enumerate(self.streams)}
+    turns = self._turned_features if self.shared_stages else self._turned_heightmaps
     maps = {}
-    for prims, fcn in zip(self.primitives, self.fcns):
-      out = rotate_images(fcn(inputs), angle)[:, pad:pad + side, pad:pad + side]
+    for prims, out in zip(self.primitives, turns(x, k, angle)):
       maps.update({p: out[..., i] for i, p in enumerate(prims)})
     q = jnp.stack([maps[p] if p in maps else jnp.full((b * k, side, side), NO_ACTION, x.dtype)
                    for p in (PUSH, GRASP)], axis=1)
     return jnp.swapaxes(q.reshape(b, k, 2, side, side), 1, 2)
+
+  def _inputs(self, x):
+    """(N, S, S, U * 4) raw inputs -> the FCNs' inputs, view -> (N, S, S, 4) normalised."""
+    x = _normalise(x.reshape(x.shape[:3] + (len(self.streams), 4)))
+    return {v: x[..., i, :] for i, v in enumerate(self.streams)}
+
+  def _turned_heightmaps(self, x, k, angle):
+    """Per FCN its (B * K, R, R, P) maps: every turn of the heightmaps through the whole FCN."""
+    x = jnp.broadcast_to(x[:, None], (x.shape[0], k) + x.shape[1:]).reshape((-1,) + x.shape[1:])
+    pad = diagonal_padding(x.shape[1], self.pad_stride)
+    # normalised after the turn, so that the fill stays a missing cell
+    return [turned(lambda t, fcn=fcn: fcn(self._inputs(t)), x, angle, pad) for fcn in self.fcns]
+
+  def _turned_features(self, x, k, angle):
+    """As `_turned_heightmaps`, the first `shared_stages` stages run once per state: their
+    feature maps are turned, the rest of the FCN runs per turn, and its maps are turned back at
+    the stem's resolution, then upsampled."""
+    blocks, inputs, out = self.shared_stages - 1, self._inputs(x), []
+    for fcn in self.fcns:
+      f = fcn.encode(inputs, blocks)
+      f = jnp.broadcast_to(f[:, None], (f.shape[0], k) + f.shape[1:]).reshape((-1,) + f.shape[1:])
+      pad = diagonal_padding(f.shape[1], 1 if self.pad_stride else 0)
+      maps = turned(lambda t, fcn=fcn: fcn.decode(t, blocks), f, angle, pad)
+      out.append(upsample(maps, x.shape[1]))
+    return out
+
+
+def turned(fn, x, angle, pad: int):
+  """`fn` of `x` (N, S, S, C) turned by -`angle` (N,), its (N, S', S', C') output turned back by
+  +`angle`: `x` first padded with `pad` cells of 0 on each side, which are cropped off after."""
+  side = x.shape[1]
+  x = jnp.pad(x, ((0, 0), (pad, pad), (pad, pad), (0, 0)))
+  return rotate_images(fn(rotate_images(x, -angle)), angle)[:, pad:pad + side, pad:pad + side]
 
 
 def build_network(config: NetworkConfig, num_rotations: int, rngs: nnx.Rngs) -> QNetwork:

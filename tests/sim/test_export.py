@@ -225,13 +225,14 @@ def test_a_state_saved_by_mvcoba_viz_runs_through_the_onnx_example(run, exported
       want[k] for k in ('primitive', 'rotation', 'row', 'col')]
 
 
-@pytest.mark.parametrize('method, overrides', [('mvp', []), ('cpg', []),
-                                               ('mvcoba', ['network.pad_to_diagonal=true'])])
+@pytest.mark.parametrize('method, overrides', [
+    ('mvp', []), ('cpg', []), ('mvcoba', ['network.pad_to_diagonal=true']),
+    ('mvcoba_2fcn', ['network.shared_stages=1', 'network.pad_to_diagonal=true'])])
 def test_other_networks_export_round_trip_with_onnx_parity(method, overrides, tmp_path):
   """MVP (four viewpoints fused in the graph), CPG (a second output: the suppressed scores its
-  rule compares) and a network padded to the diagonal export like the others: the folder loads
-  back as the same policy, ONNX matches JAX on every output, and the example picks the agent's
-  action from them."""
+  rule compares), a network padded to the diagonal and one that turns its features export like
+  the others: the folder loads back as the same policy, ONNX matches JAX on every output, and
+  the example picks the agent's action from them."""
   (tmp_path / 'run').mkdir()
   trainer, workdir, _ = _workdir(resolve(TINY, [f'network.method={method}', *overrides]),
                                  tmp_path / 'run')

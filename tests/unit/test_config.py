@@ -133,14 +133,16 @@ def test_saved_config_without_a_newer_field_gets_what_its_run_used():
 def test_saved_config_without_the_recipe_fields_keeps_the_paper_text_recipe():
   """Runs saved before the recipe fields existed trained with the paper's text: they load with
   those values, without a warning, whatever the presets now choose."""
-  saved = to_dict(resolve('authors', ['network.pad_to_diagonal=true']))
+  saved = to_dict(resolve('authors', ['network.pad_to_diagonal=true', 'network.shared_stages=2']))
   for name in ('failed_grasp_reward', 'no_change_push_reward', 'bootstrap_no_change',
                'future_max', 'grasp_symmetry', 'fresh_in_batch'):
     del saved['train'][name]
-  del saved['env']['drop'], saved['env']['occluded_share'], saved['network']['pad_to_diagonal']
+  del saved['env']['drop'], saved['env']['occluded_share']
+  del saved['network']['pad_to_diagonal'], saved['network']['shared_stages']
   config = from_dict(saved)
   assert config.train == resolve('paper_text').train and config.env.drop == 'spread'
   assert config.env.occluded_share == 0 and not config.network.pad_to_diagonal
+  assert config.network.shared_stages == 0
   assert defaulted(saved, config) == {}
 
 

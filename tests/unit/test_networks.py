@@ -19,6 +19,8 @@ from mvcoba_jax.sim.geometry import rotate_images
 
 SIDE, BATCH, ROTATIONS, VIEWS = 32, 2, 16, 4  # four views: MVP's camera poses
 TINY = NetworkConfig(features=(8, 8), groups=4)
+PADDED = dataclasses.replace(TINY, pad_to_diagonal=True)
+SHARED = dataclasses.replace(TINY, features=(8, 8, 8), shared_stages=2)  # stems and a block
 
 
 def _forward(config):
@@ -90,8 +92,9 @@ def test_unknown_choices_name_the_allowed_ones(field, value):
     networks.build_network(dataclasses.replace(TINY, **{field: value}), ROTATIONS, nnx.Rngs(0))
 
 
-def test_one_rotation_equals_its_slice_of_all_rotations(states):
-  state, forward = _forward(TINY)
+@pytest.mark.parametrize('config', [TINY, SHARED], ids=['turned_inputs', 'turned_features'])
+def test_one_rotation_equals_its_slice_of_all_rotations(states, config):
+  state, forward = _forward(config)
   color, depth = states
   every = forward(state, color, depth)
   picked = jnp.array([[3], [10]])
@@ -101,7 +104,6 @@ def test_one_rotation_equals_its_slice_of_all_rotations(states):
     np.testing.assert_allclose(some[b, :, 0], every[b, :, k], atol=1e-5)
 
 
-PADDED = dataclasses.replace(TINY, pad_to_diagonal=True)
 
 
 def test_diagonal_padding_fits_the_diagonal_on_the_stem_grid():
@@ -111,18 +113,53 @@ def test_diagonal_padding_fits_the_diagonal_on_the_stem_grid():
   assert networks.diagonal_padding(112, 0) == 0
 
 
-def test_padding_to_the_diagonal_keeps_the_corners(states):
+@pytest.mark.parametrize('unpadded', [TINY, SHARED], ids=['turned_inputs', 'turned_features'])
+def test_padding_to_the_diagonal_keeps_the_corners(states, unpadded):
   """At 45 degrees an unpadded network cuts the corners off (Q = 0, whatever is there); padded,
   a corner's Q reads that corner."""
   color, depth = states
   corner_changed = (color.at[:, :, :4, :4].set(1.0), depth.at[:, :, :4, :4].set(0.05))
   eighth = jnp.full((BATCH, 1), ROTATIONS // 8)
-  for config, cut in ((TINY, True), (PADDED, False)):
+  padded = dataclasses.replace(unpadded, pad_to_diagonal=True)
+  for config, cut in ((unpadded, True), (padded, False)):
     state, forward = _forward(config)
     q = np.asarray(forward(state, color, depth, eighth))[:, :, 0, 0, 0]
     q_changed = np.asarray(forward(state, *corner_changed, eighth))[:, :, 0, 0, 0]
     assert (q == 0).all() == cut
     assert np.allclose(q, q_changed) == cut
+
+
+def test_a_turn_through_nothing_returns_the_maps():
+  """`turned` of the identity: a quarter turn gives the maps back exactly, padded or not; at 45
+  degrees unpadded maps lose their corners and padded ones keep them (but for the outermost
+  cell, which the two interpolations blend with the padding)."""
+  row, col = np.mgrid[:SIDE, :SIDE] - (SIDE - 1) / 2
+  maps = jnp.asarray(np.stack([np.sin(row / 5.0), np.cos(col / 4.0) + 2.0], -1)[None], jnp.float32)
+  same = lambda x: x
+  for pad in (0, 8):
+    np.testing.assert_allclose(networks.turned(same, maps, jnp.array([np.pi / 2]), pad), maps,
+                               atol=1e-5)
+  eighth = jnp.array([np.pi / 4])
+  assert (networks.turned(same, maps, eighth, 0)[0, :2, :2] == 0).all()
+  np.testing.assert_allclose(networks.turned(same, maps, eighth, 8)[0, 1:3, 1:3],
+                             maps[0, 1:3, 1:3], atol=0.02)
+
+
+def test_shared_stages_run_once_per_state(states):
+  """Turning the features after the stems and a block costs under half the FLOPs of turning
+  the heightmaps, for all 16 rotations."""
+  color, depth = states
+  flops = {}
+  for name, config in (('inputs', dataclasses.replace(SHARED, shared_stages=0)),
+                       ('features', SHARED)):
+    state, forward = _forward(config)
+    flops[name] = forward.lower(state, color, depth).compile().cost_analysis()['flops']
+  assert flops['features'] < 0.5 * flops['inputs'], flops
+
+
+def test_shared_stages_leave_a_block_per_rotation():
+  with pytest.raises(ValueError, match='network.shared_stages=2: at most 1'):
+    dataclasses.replace(TINY, shared_stages=2)
 
 
 def _quarter_turn(x, rows):
@@ -131,8 +168,9 @@ def _quarter_turn(x, rows):
 
 
 def test_padded_maps_turn_with_the_state(states):
-  """A quarter turn of the state turns the padded maps of the rotation a quarter further by a
-  quarter: the padding is cropped off centred, as it was added."""
+  """Turning the heightmaps: a quarter turn of the state turns the padded maps of the rotation a
+  quarter further by a quarter; the padding is cropped off centred, as it was added. (Turning
+  features computed before the turn gives up this symmetry: the stems see the state unturned.)"""
   color, depth = states
   state, forward = _forward(PADDED)
   k = jnp.full((BATCH, 1), ROTATIONS // 8)
