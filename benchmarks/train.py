@@ -5,10 +5,12 @@ physics backend (native at every B, MJX at the `--mjx-batch` sizes), the compile
 steady-state wall time of the jitted training iteration (actions/s, updates/s), and the time of
 its parts measured alone on the same states: the batched primitive (physics), render + heightmaps
 (rendering), the 16-rotation acting forward, the target network's forward on a sampled batch of
-next states (`network` target only; part of the update) and the whole SGD update.
+next states (`network` target only; part of the update) and the whole SGD update. `--versus`
+measures a second configuration, the first with more overrides, in the same run, and gives each
+of its figures over the first's.
 
   python benchmarks/train.py [--config default] [--set KEY=VALUE] [--batch 1 8 32]
-      [--targets network acting] [--mjx-batch 8]
+      [--targets network acting] [--mjx-batch 8] [--versus KEY=VALUE ...]
 """
 from __future__ import annotations
 
@@ -74,29 +76,43 @@ def main():
   parser.add_argument('--targets', nargs='+', default=['network', 'acting'],
                       choices=config_lib.TARGETS, help='train.target values to measure')
   parser.add_argument('--repeats', type=int, default=2)
+  parser.add_argument('--versus', nargs='+', default=[], metavar='KEY=VALUE',
+                      help='overrides of a second configuration measured in the same run')
   args = parser.parse_args()
   config = config_lib.from_arguments(args)
+  variants = [('base', config)]
+  if args.versus:
+    versus = config
+    for assignment in args.versus:
+      versus = config_lib.override(versus, assignment)
+    variants.append(('versus', config_lib.validate(versus)))
   rows = []
   for b in args.batch:
     for target in args.targets:
       for backend in ('native', 'mjx') if b in args.mjx_batch else ('native',):
-        rows.append(bench(config, b, target, backend, args.repeats))
-        print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
+        for name, variant in variants:
+          rows.append({'variant': name, **bench(variant, b, target, backend, args.repeats)})
+          print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
   for r in rows:
     parts = dict(r['per_action_step_s'])
     parts.pop('network_target_in_update', None)  # inside network_update
     total = sum(parts.values())
     r['share_of_parts'] = {k: v / total for k, v in parts.items()}
-    twin = lambda **kv: [o for o in rows if o['batch'] == r['batch']
-                         and all(o[k] == v for k, v in kv.items())]
+    twin = lambda **kv: [o for o in rows if o['batch'] == r['batch'] and all(
+        o[k] == v for k, v in {'variant': r['variant'], **kv}.items())]
     same = twin(backend='mjx', target=r['target'])
     if r['backend'] == 'native' and same:
       r['actions_per_s_over_mjx'] = r['actions_per_s'] / same[0]['actions_per_s']
     network = twin(backend=r['backend'], target='network')
     if r['target'] != 'network' and network:
       r['actions_per_s_over_network_target'] = r['actions_per_s'] / network[0]['actions_per_s']
+    base = twin(variant='base', backend=r['backend'], target=r['target'])
+    if r['variant'] == 'versus' and base:
+      r['over_base'] = {'actions_per_s': r['actions_per_s'] / base[0]['actions_per_s'],
+                        **{k: v / base[0]['per_action_step_s'][k]
+                           for k, v in r['per_action_step_s'].items()}}
   print(json.dumps({'benchmark': 'train', 'config': args.config or 'default',
-                    'overrides': args.overrides,
+                    'overrides': args.overrides, 'versus': args.versus,
                     'settings': {'method': config.network.method,
                                  'steps_per_iteration': config.train.steps_per_iteration,
                                  'batch_size': config.train.batch_size,
