@@ -43,6 +43,8 @@ VARIANTS = {
     'nofresh_occlusion': NOFRESH + ['--set', 'env.occluded_share=0.25'],
     'nofresh_pad': NOFRESH + ['--set', 'network.pad_to_diagonal=true'],
     'nofresh_shared2': NOFRESH + ['--set', 'network.shared_stages=2'],
+    'nofresh_occlusion_shared2': NOFRESH + ['--set', 'env.occluded_share=0.25',
+                                            '--set', 'network.shared_stages=2'],
 }
 
 
