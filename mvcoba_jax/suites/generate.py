@@ -16,7 +16,9 @@ Every case also holds one isolated object as a readiness check, as VPG and the p
   python -m mvcoba_jax.suites.generate --validation DIR [--cases 6]
 
 writes validation suites of the same kinds drawn from other seeds (val-random, val-ordered,
-val-occluded) for choosing training settings, never the shipped suites results are reported on.
+val-occluded) for choosing training settings, never the shipped suites results are reported on,
+and val-occluded-moved, whose occluders stand where `env.occluded_share` never puts them in
+training: how a policy trained with occluders does under occluders it has not seen.
 """
 from __future__ import annotations
 
@@ -264,11 +266,8 @@ def packed_case(seed: int) -> str:
           + line(isolated, 'red', *corner, rng.uniform(0, 180)))
 
 
-def occluded_case(seed: int) -> str:
-  """A validation case like the occluded suite's: 4-7 objects set apart in drawn places and
-  poses, and either occluder 0 hiding the whole workspace from a drawn camera or occluders 1 and
-  2 each hiding a drawn part from one camera each."""
-  rng = np.random.default_rng(VALIDATION_SEED + 500 + seed)
+def set_apart(rng) -> str:
+  """4-7 clutter objects set apart in drawn places and poses, as in the occluded suite."""
   placed, text, n = [], HEADER, rng.integers(4, 8)
   while len(placed) < n:
     shape = CLUTTER_SHAPES[rng.integers(len(CLUTTER_SHAPES))]
@@ -277,12 +276,38 @@ def occluded_case(seed: int) -> str:
     if all(np.hypot(*(spot - xy)) > radius + r + 0.01 for xy, r in placed):
       placed.append((spot, radius))
       text += line(shape, COLOR_NAMES[len(placed) % 10], *spot, rng.uniform(0, 180))
+  return text
+
+
+def occluded_case(seed: int) -> str:
+  """A validation case like the occluded suite's: objects set apart, and either occluder 0
+  hiding the whole workspace from a drawn camera or occluders 1 and 2 each hiding a drawn part
+  from one camera each, where `env.occluded_share` also puts them in training."""
+  rng = np.random.default_rng(VALIDATION_SEED + 500 + seed)
+  text = set_apart(rng)
   if seed % 2 == 0:
     side = rng.choice((-1, 1))
     return text + f'occluder 0 {0.3 * side: .3f}  0.000 0.490 0\n'
   y1, y2 = rng.uniform(-0.06, 0.06, size=2)
   return text + (f'occluder 1  0.275 {y1: .3f} 0.470 0\n'
                  f'occluder 2 -0.275 {y2: .3f} 0.470 0\n')
+
+
+def moved_occluder_case(seed: int) -> str:
+  """As `occluded_case`, with the occluders where training never puts them: lower, nearer the
+  workspace, turned, and off the cameras' axis; occluder 0 hides most of the workspace from a
+  drawn camera, or occluders 1 and 2 each a drawn part from one camera each."""
+  rng = np.random.default_rng(VALIDATION_SEED + 700 + seed)
+  text = set_apart(rng)
+  if seed % 2 == 0:
+    side = rng.choice((-1, 1))
+    return text + (f'occluder 0 {side * rng.uniform(0.24, 0.26): .3f} '
+                   f'{rng.uniform(-0.05, 0.05): .3f} {rng.uniform(0.38, 0.43):.3f} '
+                   f'{rng.uniform(-25, 25):.1f}\n')
+  x, y, z, yaw = (rng.uniform(0.24, 0.26, 2), rng.uniform(-0.1, 0.1, 2), rng.uniform(0.4, 0.5, 2),
+                  rng.uniform(-30, 30, 2))
+  return text + (f'occluder 1  {x[0]:.3f} {y[0]: .3f} {z[0]:.3f} {yaw[0]:.1f}\n'
+                 f'occluder 2 {-x[1]:.3f} {y[1]: .3f} {z[1]:.3f} {yaw[1]:.1f}\n')
 
 
 def passing(draw, tries: int = 10) -> str:
@@ -307,6 +332,7 @@ def validation_suites(cases: int = 6) -> dict[str, list[str]]:
                      for seed, n in enumerate(np.linspace(16, 36, cases).round().astype(int))],
       'val-ordered': [packed_case(seed) for seed in range(cases)],
       'val-occluded': [occluded_case(seed) for seed in range(cases)],
+      'val-occluded-moved': [moved_occluder_case(seed) for seed in range(cases)],
   }
 
 
@@ -323,8 +349,8 @@ def suites() -> dict[str, list[str]]:
 def main(argv=None):
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--validation', metavar='DIR',
-                      help='write the validation suites (val-random, val-ordered, val-occluded) '
-                           'under DIR instead of the shipped suites')
+                      help='write the validation suites (val-random, val-ordered, val-occluded, '
+                           'val-occluded-moved) under DIR instead of the shipped suites')
   parser.add_argument('--cases', type=int, default=6, help='validation cases per suite')
   args = parser.parse_args(argv)
   runtime.setup()
