@@ -83,9 +83,12 @@ def main():
   variants = [('base', config)]
   if args.versus:
     versus = config
-    for assignment in args.versus:
-      versus = config_lib.override(versus, assignment)
-    variants.append(('versus', config_lib.validate(versus)))
+    try:
+      for assignment in args.versus:
+        versus = config_lib.override(versus, assignment)
+      variants.append(('versus', config_lib.validate(versus)))
+    except config_lib.ConfigError as e:
+      parser.error(f'--versus: {e}')
   rows = []
   for b in args.batch:
     for target in args.targets:
