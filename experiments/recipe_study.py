@@ -77,7 +77,7 @@ def main(argv=None) -> int:
   parser.add_argument('--workdir', default='runs/recipe')
   parser.add_argument('--suites', nargs='+', default=[str(VALIDATION / s) for s in
                                                       ('val-random', 'val-ordered',
-                                                       'val-occluded')])
+                                                       'val-occluded', 'val-occluded-moved')])
   args = parser.parse_args(argv)
   work = (ROOT / args.workdir).resolve()
   work.mkdir(parents=True, exist_ok=True)
