@@ -27,9 +27,7 @@ import jax
 from physics import settings  # noqa: E402
 
 from mvcoba_jax import runtime  # noqa: E402
-
 from mvcoba_jax.evaluation import runner  # noqa: E402
-
 from mvcoba_jax.config import resolve  # noqa: E402
 from mvcoba_jax.learner import task  # noqa: E402
 from mvcoba_jax.policy import load  # noqa: E402

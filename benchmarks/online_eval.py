@@ -20,7 +20,6 @@ import jax
 from physics import settings  # noqa: E402
 
 from mvcoba_jax import runtime  # noqa: E402
-
 from mvcoba_jax.evaluation import runner  # noqa: E402
 from mvcoba_jax.evaluation.metrics import case_metrics  # noqa: E402
 from mvcoba_jax.policy import load  # noqa: E402

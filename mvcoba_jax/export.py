@@ -22,7 +22,6 @@ import numpy as np
 from flax import nnx
 
 from mvcoba_jax import methods, perception
-
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Config
 from mvcoba_jax.learner import agent, networks

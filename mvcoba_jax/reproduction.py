@@ -16,7 +16,6 @@ import shutil
 import time
 
 from mvcoba_jax import api, folders
-
 from mvcoba_jax.config import Config, ConfigError, validate
 from mvcoba_jax.evaluation import paper
 from mvcoba_jax.evaluation.report import write_whole

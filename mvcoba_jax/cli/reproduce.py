@@ -21,7 +21,6 @@ import argparse
 import sys
 
 from mvcoba_jax import api, methods
-
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.cli import fail
 from mvcoba_jax.evaluation import paper

@@ -21,7 +21,6 @@ import optax
 from flax import nnx, struct
 
 from mvcoba_jax import methods, perception
-
 from mvcoba_jax.config import Config
 from mvcoba_jax.evaluation.metrics import RunLog
 from mvcoba_jax.learner import agent, networks, task

@@ -268,7 +268,7 @@ class QNetwork(nnx.Module):
 
   def _turned_heightmaps(self, x, k, angle):
     """Per FCN its (B * K, R, R, P) maps: every turn of the heightmaps through the whole FCN."""
-    x = jnp.broadcast_to(x[:, None], (x.shape[0], k) + x.shape[1:]).reshape((-1,) + x.shape[1:])
+    x = _per_rotation(x, k)
     pad = diagonal_padding(x.shape[1], self.pad_stride)
     # normalised after the turn, so that the fill stays a missing cell
     return [turned(lambda t, fcn=fcn: fcn(self._inputs(t)), x, angle, pad) for fcn in self.fcns]
@@ -280,11 +280,16 @@ class QNetwork(nnx.Module):
     blocks, inputs, out = self.shared_stages - 1, self._inputs(x), []
     for fcn in self.fcns:
       f = fcn.encode(inputs, blocks)
-      f = jnp.broadcast_to(f[:, None], (f.shape[0], k) + f.shape[1:]).reshape((-1,) + f.shape[1:])
+      f = _per_rotation(f, k)
       pad = diagonal_padding(f.shape[1], 1 if self.pad_stride else 0)
       maps = turned(lambda t, fcn=fcn: fcn.decode(t, blocks), f, angle, pad)
       out.append(upsample(maps, x.shape[1]))
     return out
+
+
+def _per_rotation(x, k: int):
+  """(N, ...) -> (N * K, ...): each state's maps once per rotation, state-major as the angles."""
+  return jnp.broadcast_to(x[:, None], (x.shape[0], k) + x.shape[1:]).reshape((-1,) + x.shape[1:])
 
 
 def turned(fn, x, angle, pad: int):

@@ -15,7 +15,6 @@ import jax.numpy as jnp
 from flax import struct
 
 from mvcoba_jax import perception
-
 from mvcoba_jax.config import TrainConfig
 from mvcoba_jax.learner import agent
 from mvcoba_jax.sim.tabletop import EnvState, StepInfo, Tabletop, where_envs

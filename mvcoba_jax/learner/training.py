@@ -15,7 +15,6 @@ from flax import nnx, struct
 from jax.sharding import Mesh, PartitionSpec
 
 from mvcoba_jax import methods, perception
-
 from mvcoba_jax.config import Config
 from mvcoba_jax.learner import agent, networks, task
 from mvcoba_jax.learner import replay as replay_lib

@@ -9,9 +9,7 @@ import numpy as np
 import pytest
 
 from mvcoba_jax import methods, perception, video, viz
-
 from mvcoba_jax.evaluation import metrics, runner
-
 from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.config import resolve
 from mvcoba_jax.learner import agent

@@ -15,7 +15,6 @@ import pytest
 from flax import nnx
 
 from mvcoba_jax import export, methods, perception, policy
-
 from mvcoba_jax.cli import export as export_cli
 from mvcoba_jax.cli import viz as viz_cli
 from mvcoba_jax.config import ConfigError, defaulted, from_dict, resolve, to_dict

@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 from mvcoba_jax import perception
-
 from mvcoba_jax.learner import networks
 from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.geometry import pixel_to_world

@@ -4,7 +4,6 @@ import jax.numpy as jnp
 import numpy as np
 
 from mvcoba_jax import methods
-
 from mvcoba_jax.learner import agent
 
 MVCOBA = methods.get('mvcoba')

@@ -6,7 +6,6 @@ import pytest
 from flax import nnx
 
 from mvcoba_jax import export, methods
-
 from mvcoba_jax.config import NetworkConfig, resolve
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.sim.primitives import GRASP, PUSH

@@ -10,7 +10,6 @@ import pytest
 from flax import nnx
 
 from mvcoba_jax import methods
-
 from mvcoba_jax.config import NetworkConfig
 from mvcoba_jax.learner import networks
 from mvcoba_jax.methods import names as method_names

@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 from mvcoba_jax import methods
-
 from mvcoba_jax.config import resolve
 from mvcoba_jax.learner import agent, networks, suppression
 from mvcoba_jax.sim.primitives import GRASP, PUSH
