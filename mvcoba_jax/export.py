@@ -7,7 +7,9 @@ directory (config.json, checkpoints/) and writes the following to DIR; `policy.l
 - model.onnx: the Q-network forward for one state and all K rotations, rotations included;
 - model.json: names, shapes and dtypes of the parameters, the config, the heightmap frame, the
   rotations, the input normalisation, the method's action rule and what the ONNX graph leaves
-  to the caller (the action rule and pixel -> world), all that `examples/onnx_infer.py` needs.
+  to the caller (the action rule and pixel -> world), all that `examples/onnx_infer.py` needs;
+  with `results`, the figures that evaluations measured for these parameters, so a shipped
+  policy says what it scores and `mvcoba-eval` can check it.
 """
 from __future__ import annotations
 
@@ -25,7 +27,7 @@ from mvcoba_jax import methods, perception
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Config
 from mvcoba_jax.learner import agent, networks
-from mvcoba_jax.policy import FORMAT, PolicyError, flat_params, load
+from mvcoba_jax.policy import FORMAT, PolicyError, fingerprint, flat_params, load
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.sim.primitives import GRASP, PUSH
 
@@ -75,15 +77,19 @@ def action_rule(method: methods.Method) -> dict:
           'greedy': 'exploration (epsilon-greedy) is a training matter and is not exported'}
 
 
-def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir) -> dict:
-  """The content of model.json."""
+def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir,
+             commit: str | None = None, measured: dict | None = None) -> dict:
+  """The content of model.json; `commit` names the code that trained it when known, `measured`
+  is `figures`' answer."""
   side, k = perception.grid_size(config), config.env.num_rotations
   method = methods.get(config.network.method)
   views, num_views = method.views, len(config.scene.cameras)
   res, half = config.perception.heightmap_resolution, config.scene.workspace_half
   return {
       'format': FORMAT,
-      'source': {'workdir': str(pathlib.Path(workdir).resolve()), 'checkpoint_step': step},
+      'source': {'workdir': str(pathlib.Path(workdir).resolve()), 'checkpoint_step': step,
+                 'seed': config.seed, 'commit': commit},
+      'figures': measured or {},
       'method': config.network.method,
       'network': dataclasses.asdict(config.network),
       'config': config_lib.to_dict(config),
@@ -137,9 +143,41 @@ def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir) 
   }
 
 
-def export(workdir, out) -> dict[str, pathlib.Path]:
-  """Writes params.npz, model.json and model.onnx of the latest checkpoint of `workdir` to `out`."""
+def figures(results, model: networks.QNetwork) -> dict:
+  """protocol -> suite -> the mean figures (and the runs behind them) of every row of these
+  results.json files that evaluated `model`'s parameters (`policy.fingerprint`). Raises
+  PolicyError naming the file that cannot be read, that holds no such row, or that measures one
+  protocol and suite twice with different figures."""
+  mine, found = fingerprint(model), {}
+  for path in map(pathlib.Path, results):
+    try:
+      report = json.loads(path.read_text())
+      rows = [(str(row['settings'].get('protocol', 'frozen')), suite, {
+          **row['mean'], 'cases': len(row['settings']['cases']),
+          'runs_per_case': row['settings']['runs'], 'max_actions': row['settings']['max_actions'],
+          'seed': row['settings']['seed'], 'results': str(path)})
+              for suite, by_label in report.items() for row in by_label.values()
+              if row['settings'].get('params') == mine]
+    except (OSError, ValueError, TypeError, KeyError, AttributeError) as e:
+      raise PolicyError(f'{path}: not the results.json of an mvcoba-eval '
+                        f'({type(e).__name__}: {e})') from None
+    if not rows:
+      raise PolicyError(f'{path}: no row evaluated these parameters (fingerprint {mine})')
+    for protocol, suite, figure in rows:
+      known = found.setdefault(protocol, {}).get(suite)
+      if known is not None and {**known, 'results': ''} != {**figure, 'results': ''}:
+        raise PolicyError(f'{path}: {protocol} {suite} measured again with other figures than '
+                          f'in {known["results"]}')
+      found[protocol][suite] = figure
+  return found
+
+
+def export(workdir, out, results=(), commit: str | None = None) -> dict[str, pathlib.Path]:
+  """Writes params.npz, model.json and model.onnx of the latest checkpoint of `workdir` to `out`;
+  model.json carries the figures of the `results` files' rows for these parameters (`figures`)
+  and `commit`, the code that trained it, when given."""
   config, model, step = load(workdir)
+  measured = figures(results, model)
   flat = flat_params(model)
   proto = onnx_model(config, model)
   out = pathlib.Path(out)
@@ -147,6 +185,7 @@ def export(workdir, out) -> dict[str, pathlib.Path]:
   paths = {'params': out / 'params.npz', 'model_json': out / 'model.json',
            'onnx': out / 'model.onnx'}
   np.savez(paths['params'], **flat)
-  paths['model_json'].write_text(json.dumps(describe(config, flat, step, workdir), indent=1))
+  paths['model_json'].write_text(json.dumps(
+      describe(config, flat, step, workdir, commit, measured), indent=1))
   paths['onnx'].write_bytes(proto.SerializeToString())
   return paths

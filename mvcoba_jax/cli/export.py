@@ -1,6 +1,6 @@
 """Exports the latest checkpoint of a training run: params.npz, model.json and model.onnx.
 
-  mvcoba-export --checkpoint WORKDIR --out DIR
+  mvcoba-export --checkpoint WORKDIR --out DIR [--results RESULTS_JSON ...] [--commit SHA]
 """
 from __future__ import annotations
 
@@ -16,9 +16,13 @@ def main(argv=None) -> int:
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--checkpoint', required=True, help='work directory of an mvcoba-train run')
   parser.add_argument('--out', required=True, help='output folder')
+  parser.add_argument('--results', nargs='+', default=[], metavar='RESULTS_JSON',
+                      help='results.json of evaluations of this policy (mvcoba-eval, '
+                           'mvcoba-reproduce): their figures for it go into model.json')
+  parser.add_argument('--commit', help='the commit of the code that trained it, for model.json')
   args = parser.parse_args(argv)
   try:
-    paths = export(args.checkpoint, args.out)
+    paths = export(args.checkpoint, args.out, args.results, args.commit)
   except PolicyError as e:
     return fail(e)
   except OSError as e:  # the output folder cannot be written
