@@ -1,13 +1,16 @@
 """The recipe study of MV-COBA (docs/results/recipe.md): each change of the learning recipe alone
 from the paper's text, and the authors' whole recipe, trained over seeds and evaluated on the
-validation suites (generated apart from the shipped ones), each step resumable.
+validation suites (generated apart from the shipped ones), each step resumable; and the chosen
+recipe trained longer.
 
   python experiments/recipe_study.py [--variants NAME ...] [--seeds 0 1] [--runs 3]
                                      [--workdir runs/recipe] [--suites DIR ...]
 
 Every run trains with `mvcoba-train` into WORKDIR/VARIANT/mvcoba-sSEED and is evaluated with
 `mvcoba-eval` into WORKDIR/eval/VARIANT-sSEED; a run already trained or evaluated is passed over,
-so the study continues where a killed one stopped. Then `mvcoba-eval --tables` joins every
+so the study continues where a killed one stopped. A variant that continues another (`CONTINUES`)
+starts from a copy of that variant's finished run of the same seed and resumes it to its own
+total. Then `mvcoba-eval --tables` joins every
 evaluation into WORKDIR/tables, whose rows group by training config: one interval per variant
 over its seeds. Each command, its commit and its wall time go to WORKDIR/study.jsonl.
 """
@@ -16,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
+import shutil
 import subprocess
 import sys
 import time
@@ -45,7 +49,15 @@ VARIANTS = {
     'nofresh_shared2': NOFRESH + ['--set', 'network.shared_stages=2'],
     'nofresh_occlusion_shared2': NOFRESH + ['--set', 'env.occluded_share=0.25',
                                             '--set', 'network.shared_stages=2'],
+    'default_6000': NOFRESH + ['--set', 'env.occluded_share=0.25',
+                               '--set', 'train.total_actions=6000'],
+    'default_12000': NOFRESH + ['--set', 'env.occluded_share=0.25',
+                                '--set', 'train.total_actions=12000'],
 }
+# variant -> the variant whose finished run it resumes to more actions. The same as training
+# that long in one go: nothing in the recipe reads the total (constant learning rate, exploration
+# decayed over the first 800 actions), and a checkpoint holds the whole training state.
+CONTINUES = {'default_6000': 'nofresh_occlusion', 'default_12000': 'default_6000'}
 
 
 def commit() -> str:
@@ -87,6 +99,15 @@ def main(argv=None) -> int:
     for variant in args.variants:
       name = f'{variant}-s{seed}'
       train_dir, eval_dir = work / variant / f'mvcoba-s{seed}', work / 'eval' / name
+      if variant in CONTINUES and not train_dir.exists():
+        start = work / CONTINUES[variant] / f'mvcoba-s{seed}'
+        if not (start / 'eval_summary.json').is_file():
+          print(f'{name}: waits for {start} to finish', flush=True)
+          continue
+        partial = train_dir.with_name(train_dir.name + '.partial')  # a killed copy is redone
+        shutil.rmtree(partial, ignore_errors=True)
+        shutil.copytree(start, partial, ignore=shutil.ignore_patterns('eval_summary.json'))
+        partial.rename(train_dir)
       if not (train_dir / 'eval_summary.json').is_file():
         if not run(['mvcoba-train', *VARIANTS[variant], '--seed', str(seed), '--workdir',
                     str(train_dir), '--eval-actions', '1']
