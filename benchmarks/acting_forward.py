@@ -1,8 +1,9 @@
 """The acting forward alone (B states x all rotations, the default preset's network), for each way
-of turning and padding and in float32 and bfloat16, in one run, with the shipped policy's
-trained parameters (pretrained/mvcoba: every variant has the same parameters, only the turn
-differs); whether the action bfloat16 picks is float32's, or one whose float32 Q value is within
-`--tolerance` of the best.
+of turning and padding, trunk width and float32 and bfloat16, in one run, with the shipped
+policy's trained parameters (pretrained/mvcoba: every variant of its width has the same
+parameters, only the turn differs; a narrower trunk has its own initial ones); whether the
+action bfloat16 picks is float32's, or one whose float32 Q value is within `--tolerance` of the
+best.
 
 Prints one JSON object: per variant the compile and median wall time of the jitted forward, its
 time over the first variant's, and for bfloat16 the share of states whose greedy action (argmax
@@ -41,6 +42,8 @@ VARIANTS = [  # (name, network overrides, dtype)
     ('turned_first_block', {'shared_stages': 2}, jnp.float32),
     ('turned_first_block_bf16', {'shared_stages': 2}, jnp.bfloat16),
     ('padded_first_block', {'shared_stages': 2, 'pad_to_diagonal': True}, jnp.float32),
+    ('trunk_16_32_32', {'features': (16, 32, 32)}, jnp.float32),
+    ('trunk_16_32_32_turned_stems', {'features': (16, 32, 32), 'shared_stages': 1}, jnp.float32),
 ]
 
 
@@ -74,10 +77,12 @@ def main():
   rows, reference = [], {}
   for name, overrides, dtype in VARIANTS:
     network = dataclasses.replace(config.network, **overrides)
-    graphdef, _ = nnx.split(networks.build_network(network, k, nnx.Rngs(0)))
+    graphdef, own = nnx.split(networks.build_network(network, k, nnx.Rngs(0)))
+    # another width has other shapes: its own initial parameters (the time does not depend on them)
+    params = trained if 'features' not in overrides else own
     cast = lambda tree: jax.tree.map(lambda x: x.astype(dtype), tree)
     forward = jax.jit(lambda p, c, d: nnx.merge(graphdef, cast(p))(cast(c), cast(d)))
-    q, first, wall = timed(forward, trained, color, depth, repeats=args.repeats)
+    q, first, wall = timed(forward, params, color, depth, repeats=args.repeats)
     row = {'variant': name, 'network': overrides, 'dtype': jnp.dtype(dtype).name,
            'compile_s': first - wall, 'wall_s': wall}
     key = json.dumps(overrides, sort_keys=True)
