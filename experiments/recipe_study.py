@@ -31,7 +31,8 @@ VALIDATION = ROOT / 'docs' / 'results' / 'recipe' / 'validation'
 # recipe (the default preset when the screen began); the `nofresh_` variants from the default
 # preset the screen chose (the authors' recipe without the update's fresh transitions); `width_`
 # and `turned_stems` make today's default's acting forward cheaper (a narrower trunk, the stems
-# run once per state: benchmarks/acting_forward.py).
+# run once per state: benchmarks/acting_forward.py); `packed` adds packed training drops, for
+# the packed validation cases.
 PAPER_TEXT = ['--config', 'paper_text']
 NOFRESH = ['--config', 'authors', '--set', 'train.fresh_in_batch=false']
 VARIANTS = {
@@ -56,6 +57,7 @@ VARIANTS = {
     'width_16_32_32_turned_stems': NOFRESH + ['--set', 'env.occluded_share=0.25',
                                               '--set', 'network.features=16,32,32',
                                               '--set', 'network.shared_stages=1'],
+    'packed': NOFRESH + ['--set', 'env.occluded_share=0.25', '--set', 'env.packed_share=0.25'],
     'turned_stems': NOFRESH + ['--set', 'env.occluded_share=0.25',
                                '--set', 'network.shared_stages=1'],
     'default_6000': NOFRESH + ['--set', 'env.occluded_share=0.25',

@@ -193,6 +193,10 @@ class EnvConfig:
   # Share of reset(key)'s tabletops with an occluder between one camera (drawn) and the table,
   # hiding all (occluder slot 0) or part (slot 1, shifted sideways) of what that camera sees.
   occluded_share: float = 0.0
+  # Share of reset(key)'s tabletops laid out packed instead (beyond the paper, whose training
+  # drops are never packed): the objects side by side in rows `PACKED_GAP` apart, each in its
+  # rest pose along the rows or across them, the rows turned by a drawn yaw about a drawn centre.
+  packed_share: float = 0.0
   num_rotations: int = 16
   settle_steps: int = 375  # physics steps (1.5 s) for placed or dropped objects to come to rest
   drop_margin: float = 0.06  # keep dropped object centres this far inside the workspace
@@ -220,6 +224,7 @@ class EnvConfig:
     check(self, 'env.', {
         'num_objects': Between(1, 256), 'num_rotations': Between(1, 64), 'drop': DROPS,
         'heap_half': Between(0.02, 1), 'occluded_share': Between(0, 1),
+        'packed_share': Between(0, 1),
         'settle_steps': Between(0, 100000), 'drop_margin': Between(0, 0.2),
         'layer_height': Between(0, 1, low_open=True), 'grasp_depth': Between(0, 0.2),
         'lift_height': Between(0, 1, low_open=True), 'approach_height': Between(0, 1, low_open=True),

@@ -21,6 +21,8 @@ from mvcoba_jax.sim.scene import GRIPPER_PARK, Scene, build_scene
 
 PLACEMENT_TRIES = 16  # candidate spots per object and drop layer
 PLACEMENT_GAP = 0.004  # clearance between footprint circles of objects dropped in one layer
+PACKED_GAP = 0.001  # between the footprints of packed objects, as in the ordered suite
+PACKED_ROW = (0.10, 0.20)  # length of a packed layout's rows, drawn (m)
 # Where `env.occluded_share` puts an occluder, in the frame of the camera it hides (x towards the
 # camera's horizontal position, as a fraction of its distance; y sideways; z height, m): slot 0
 # hides the whole workspace and slot 1 a part, as in the occluded suite's cases.
@@ -110,6 +112,7 @@ class Tabletop:
                                jnp.float32)
     self._bounding_radius = jnp.asarray([0.5 * np.linalg.norm(s.rest_extent)
                                          for s in slot_shapes], jnp.float32)
+    self._footprint = jnp.asarray([s.rest_extent[:2] for s in slot_shapes], jnp.float32)
 
   # ----------------------------------------------------------------------------- physics core
   def _place_gripper(self, sim: SimState, pose) -> SimState:
@@ -182,10 +185,54 @@ class Tabletop:
     else:
       quat = quat_mul(yaw_quat(jax.random.uniform(k_yaw, (m,), maxval=2 * jnp.pi)),
                       self._rest_quat)
+    if env.packed_share > 0:
+      k_packed, k_share = jax.random.split(jax.random.fold_in(key, 2))
+      packed = jax.random.uniform(k_share) < env.packed_share
+      packed_pos, packed_quat = self._packed(k_packed, order, in_play)
+      pos = jnp.where(packed, packed_pos, pos)
+      quat = jnp.where(packed, packed_quat, quat)
     color = jnp.asarray(shapes.COLORS)[jax.random.permutation(k_color, jnp.arange(m) % 10)]
     occluder_pos, occluder_quat = self.drawn_occluders(jax.random.fold_in(key, 1))
     return Layout(in_play=in_play, pos=pos, quat=quat, color=color,
                   occluder_pos=occluder_pos, occluder_quat=occluder_quat)
+
+  def _packed(self, key, order, in_play):
+    """Poses of `env.packed_share`'s layouts: the objects in play, in `order`, side by side in
+    rows `PACKED_GAP` apart, each along the rows or turned across them (drawn), a row full when
+    the next would pass its drawn length (`PACKED_ROW`); the rows turned by a drawn yaw about a
+    drawn centre that keeps the layout inside the workspace less `env.drop_margin`."""
+    m = self.num_slots
+    k_row, k_across, k_yaw, k_centre = jax.random.split(key, 4)
+    row = jax.random.uniform(k_row, (), minval=PACKED_ROW[0], maxval=PACKED_ROW[1])
+    across = jax.random.bernoulli(k_across, shape=(m,))
+    size = jnp.where(across[:, None], self._footprint[:, ::-1], self._footprint)
+
+    def place(i, carry):
+      xy, cursor, row_y, row_depth = carry
+      s = order[i]
+      length, depth = size[s, 0], size[s, 1]
+      wrap = (cursor > 0) & (cursor + length > row)
+      row_y = jnp.where(wrap, row_y + row_depth + PACKED_GAP, row_y)
+      cursor, row_depth = jnp.where(wrap, 0.0, cursor), jnp.where(wrap, 0.0, row_depth)
+      xy = xy.at[s].set(jnp.stack([cursor + 0.5 * length, row_y + 0.5 * depth]))
+      return xy, cursor + length + PACKED_GAP, row_y, jnp.maximum(row_depth, depth)
+
+    n = self.config.env.num_objects
+    xy, _, _, _ = jax.lax.fori_loop(0, n, place, (jnp.zeros((m, 2)), 0.0, 0.0, 0.0))
+    low = jnp.min(jnp.where(in_play[:, None], xy - 0.5 * size, jnp.inf), axis=0)
+    high = jnp.max(jnp.where(in_play[:, None], xy + 0.5 * size, -jnp.inf), axis=0)
+    yaw = jax.random.uniform(k_yaw, (), maxval=2 * jnp.pi)
+    c, s = jnp.cos(yaw), jnp.sin(yaw)
+    local = xy - 0.5 * (low + high)
+    turned = jnp.stack([c * local[:, 0] - s * local[:, 1], s * local[:, 0] + c * local[:, 1]], 1)
+    room = jnp.maximum(self.config.scene.workspace_half - self.config.env.drop_margin
+                       - 0.5 * jnp.linalg.norm(high - low), 0.0)
+    centre = jax.random.uniform(k_centre, (2,), minval=-room, maxval=room)
+    z = self._rest_half_height + 0.002
+    pos = jnp.where(in_play[:, None], jnp.concatenate([turned + centre, z[:, None]], 1),
+                    self._park_qpos[:, :3])
+    quat = quat_mul(yaw_quat(yaw + jnp.where(across, 0.5 * jnp.pi, 0.0)), self._rest_quat)
+    return pos, quat
 
   def drawn_occluders(self, key):
     """Occluder poses of a random drop: with probability `env.occluded_share`, one camera (drawn)

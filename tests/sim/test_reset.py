@@ -1,5 +1,6 @@
 """Random drops: spread drops (the paper text's scenes) are deterministic, varied, settled and
-apart; heap drops (the default preset's, the authors') settle sound on both backends."""
+apart; heap drops (the default preset's, the authors') settle sound on both backends; occluded
+and packed shares of the drops."""
 import jax
 import numpy as np
 import pytest
@@ -82,3 +83,29 @@ def test_occluded_share_hides_one_camera_wholly_or_in_part():
   assert (other > 0.8).all() and (hidden < 0.75).all(), seen
   assert (hidden < 0.05).any() and (hidden > 0.2).any(), seen  # whole and partial both drawn
   assert (seen.argmin(axis=1) == 0).any() and (seen.argmin(axis=1) == 1).any(), seen
+
+
+def test_packed_share_lays_objects_side_by_side():
+  """With env.packed_share=1 every drop is packed: the objects settle sound in the workspace, each
+  beside another as close as their footprints allow (a few mm), in rows turned differently from
+  drop to drop."""
+  from mvcoba_jax.sim import shapes
+  keys = jax.random.split(jax.random.PRNGKey(11), 4)
+  env = make_env('default', 'native', 'env.packed_share=1', 'env.occluded_share=0')
+  states = jax.jit(jax.vmap(env.reset))(keys)
+  assert np.asarray(states.healthy).all()
+  in_play = np.asarray(states.in_play)
+  assert (in_play.sum(axis=1) == env.config.env.num_objects).all(), in_play.sum(axis=1)
+  pos = np.asarray(jax.vmap(env.object_positions)(states))
+  size = np.array([shapes.SHAPES[s].rest_extent[:2].max() for s in env.scene.index.slot_shapes])
+  yaws = []
+  for b in range(len(keys)):
+    assert max_penetration(env, states.sim.qpos[b]) < 0.002
+    mine = np.flatnonzero(in_play[b])
+    xy = pos[b, mine, :2]
+    assert np.abs(xy).max() <= env.config.scene.workspace_half
+    apart = np.linalg.norm(xy[:, None] - xy[None], axis=-1) + np.eye(len(mine))
+    reach = 0.5 * (size[mine][:, None] + size[mine][None]) + 0.005
+    assert (apart <= reach).any(axis=1).all(), np.round(apart.min(axis=1), 3)
+    yaws.append(np.arctan2(*(xy[1] - xy[0])[::-1]))
+  assert np.ptp(yaws) > 0.3, yaws

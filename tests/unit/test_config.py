@@ -52,6 +52,7 @@ def test_presets_are_valid(preset):
     ('env.drop=pile', "env.drop='pile': allowed values are spread, heap"),
     ('env.heap_half=0.3', 'env.heap_half=0.3 must not exceed scene.workspace_half'),
     ('env.occluded_share=1.5', 'env.occluded_share=1.5: allowed range [0, 1]'),
+    ('env.packed_share=-0.1', 'env.packed_share=-0.1: allowed range [0, 1]'),
     ('train.future_max=all', "train.future_max='all': allowed values are rule, both"),
     ('train.no_change_push_reward=-2', 'train.no_change_push_reward=-2.0: allowed range'),
     ('env.descend_speed=1e-300', 'env.approach_height / env.descend_speed = 8e+298 s'),
@@ -137,11 +138,12 @@ def test_saved_config_without_the_recipe_fields_keeps_the_paper_text_recipe():
   for name in ('failed_grasp_reward', 'no_change_push_reward', 'bootstrap_no_change',
                'future_max', 'grasp_symmetry', 'fresh_in_batch'):
     del saved['train'][name]
-  del saved['env']['drop'], saved['env']['occluded_share']
+  del saved['env']['drop'], saved['env']['occluded_share'], saved['env']['packed_share']
   del saved['network']['pad_to_diagonal'], saved['network']['shared_stages']
   config = from_dict(saved)
   assert config.train == resolve('paper_text').train and config.env.drop == 'spread'
-  assert config.env.occluded_share == 0 and not config.network.pad_to_diagonal
+  assert config.env.occluded_share == 0 and config.env.packed_share == 0
+  assert not config.network.pad_to_diagonal
   assert config.network.shared_stages == 0
   assert defaulted(saved, config) == {}
 
