@@ -45,25 +45,24 @@ def table(work: pathlib.Path, metrics=METRICS) -> str:
     if (folder / 'done').is_file():
       evaluations.setdefault(folder.name.rsplit('-s', 1)[0], []).append(str(folder))
   minutes = training_minutes(work / 'study.jsonl')
-  suites = None
+  # by the suite's folder name: studies run from other checkouts name other paths
+  joined = {variant: {pathlib.Path(suite).name: rows
+                      for suite, rows in report.joined_report(evaluations[variant]).items()}
+            for variant in VARIANTS if variant in evaluations}
+  suites = list(dict.fromkeys(suite for by_suite in joined.values() for suite in by_suite))
   lines = []
-  for variant in [v for v in VARIANTS if v in evaluations]:
-    # by the suite's folder name: studies run from other checkouts name other paths
-    joined = {pathlib.Path(suite).name: rows
-              for suite, rows in report.joined_report(evaluations[variant]).items()}
-    suites = suites or list(joined)
+  for variant, by_suite in joined.items():
     cells = []
-    for suite in suites:
-      over = report.seed_intervals(joined.get(suite, {}), minimum=1)
+    for suite in suites:  # a suite a variant was not evaluated on reads '-'
+      over = report.seed_intervals(by_suite.get(suite, {}), minimum=1)
       entry = next(iter(over.values()), {})
       cells += [cell(entry.get(m)) for m in metrics]
     seeds = len(evaluations[variant])
     took = f'{minutes[variant]:.1f}' if variant in minutes else '-'
     lines.append(f'| {variant} | {seeds} | ' + ' | '.join(cells) + f' | {took} |')
-  names = suites or []
-  head = ('| variant | seeds | ' + ' | '.join(f'{s}: {m.replace("_", " ")}' for s in names
+  head = ('| variant | seeds | ' + ' | '.join(f'{s}: {m.replace("_", " ")}' for s in suites
                                              for m in metrics)
-          + ' | training (min) |\n|---|---|' + '---|' * (len(names) * len(metrics) + 1))
+          + ' | training (min) |\n|---|---|' + '---|' * (len(suites) * len(metrics) + 1))
   return '\n'.join([head] + lines)
 
 
