@@ -10,6 +10,7 @@ import pathlib
 
 import numpy as np
 
+from mvcoba_jax import config as config_lib
 from mvcoba_jax.evaluation import intervals, metrics
 
 METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action efficiency (%)'),
@@ -98,6 +99,16 @@ def _flat(tree, prefix=''):
   return {k: v for name, sub in tree.items() for k, v in _flat(sub, f'{prefix}{name}.').items()}
 
 
+def as_trained(training: dict) -> dict:
+  """A row's recorded training config with the fields added since it was evaluated at the values
+  its run used (`config.LEGACY`, else today's defaults), so that the rows of one training that two
+  versions of the code evaluated pool; one that no longer reads as a config stays as recorded."""
+  try:
+    return config_lib.trained_as(config_lib.from_dict(training))
+  except (config_lib.ConfigError, TypeError, ValueError, KeyError, AttributeError):
+    return training
+
+
 def training_groups(rows: dict[str, dict]) -> dict[str, list[str]]:
   """Rows that are one method trained with one config except its seed, named: the method, or
   when it was trained in several configs, the method and the fields where its config differs
@@ -110,7 +121,7 @@ def training_groups(rows: dict[str, dict]) -> dict[str, list[str]]:
   for label, result in rows.items():
     settings = result.get('settings') if isinstance(result.get('settings'), dict) else {}
     training = settings.get('training')
-    key = json.dumps(training, sort_keys=True) if isinstance(training, dict) else None
+    key = json.dumps(as_trained(training), sort_keys=True) if isinstance(training, dict) else None
     protocol = str(settings.get('protocol', 'frozen'))[:20]
     method = method_of(label) + (f' [{protocol}]' if protocol != 'frozen' else '')
     seen = seeds.setdefault((method, key), [])

@@ -1,5 +1,6 @@
 """Interval estimates over training seeds, on synthetic scores with known answers, and the
 report's table of them."""
+import json
 import math
 
 import numpy as np
@@ -129,3 +130,18 @@ def test_intervals_pool_only_seeds_of_one_training_config():
   text = paper.comparisons({'ordered': rows})
   assert '| MV-COBA (mvcoba {train.gamma=0.2}) | 2 | 91.5 [' in text and '| 86.3 |' in text
   assert 'MV-COBA {train.gamma=0.2} > MV-COBA' in text
+
+
+def test_rows_of_one_training_evaluated_by_two_versions_pool():
+  """A row evaluated before a config field existed records no value for it: read with the value
+  its run used, it pools with a row of the same training that records the field."""
+  from mvcoba_jax.config import resolve, trained_as
+  def row(grasp, seed, training):
+    cases = {c: {key: grasp for key, _ in report.METRICS} for c in 'ab'}
+    return {'cases': cases, 'mean': {}, 'settings': {'training': training, 'training_seed': seed}}
+  today = json.loads(json.dumps(trained_as(resolve('tiny'))))
+  before = json.loads(json.dumps(today))
+  del before['env']['packed_share']
+  rows = {'mvcoba (s0)': row(70.0, 0, before), 'mvcoba (s1)': row(80.0, 1, today)}
+  assert report.training_groups(rows) == {'mvcoba': ['mvcoba (s0)', 'mvcoba (s1)']}
+  assert report.seed_intervals(rows)['mvcoba']['grasp_success'][0] == pytest.approx(75.0)
