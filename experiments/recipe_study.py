@@ -35,6 +35,7 @@ VALIDATION = ROOT / 'docs' / 'results' / 'recipe' / 'validation'
 # the packed validation cases.
 PAPER_TEXT = ['--config', 'paper_text']
 NOFRESH = ['--config', 'authors', '--set', 'train.fresh_in_batch=false']
+OCCLUDED = NOFRESH + ['--set', 'env.occluded_share=0.25']  # today's default preset, spelt out
 VARIANTS = {
     'paper_text': PAPER_TEXT,
     'targets': PAPER_TEXT + ['--set', 'train.bootstrap_no_change=false',
@@ -47,23 +48,17 @@ VARIANTS = {
     'future_both': PAPER_TEXT + ['--set', 'train.future_max=both'],
     'push_penalty': PAPER_TEXT + ['--set', 'train.no_change_push_reward=-1'],
     'occlusion': PAPER_TEXT + ['--set', 'env.occluded_share=0.25'],
-    'nofresh_occlusion': NOFRESH + ['--set', 'env.occluded_share=0.25'],
+    'nofresh_occlusion': OCCLUDED,
     'nofresh_pad': NOFRESH + ['--set', 'network.pad_to_diagonal=true'],
     'nofresh_shared2': NOFRESH + ['--set', 'network.shared_stages=2'],
-    'nofresh_occlusion_shared2': NOFRESH + ['--set', 'env.occluded_share=0.25',
-                                            '--set', 'network.shared_stages=2'],
-    'width_16_32_32': NOFRESH + ['--set', 'env.occluded_share=0.25',
-                                 '--set', 'network.features=16,32,32'],
-    'width_16_32_32_turned_stems': NOFRESH + ['--set', 'env.occluded_share=0.25',
-                                              '--set', 'network.features=16,32,32',
-                                              '--set', 'network.shared_stages=1'],
-    'packed': NOFRESH + ['--set', 'env.occluded_share=0.25', '--set', 'env.packed_share=0.25'],
-    'turned_stems': NOFRESH + ['--set', 'env.occluded_share=0.25',
-                               '--set', 'network.shared_stages=1'],
-    'default_6000': NOFRESH + ['--set', 'env.occluded_share=0.25',
-                               '--set', 'train.total_actions=6000'],
-    'default_12000': NOFRESH + ['--set', 'env.occluded_share=0.25',
-                                '--set', 'train.total_actions=12000'],
+    'nofresh_occlusion_shared2': OCCLUDED + ['--set', 'network.shared_stages=2'],
+    'width_16_32_32': OCCLUDED + ['--set', 'network.features=16,32,32'],
+    'width_16_32_32_turned_stems': OCCLUDED + ['--set', 'network.features=16,32,32',
+                                               '--set', 'network.shared_stages=1'],
+    'packed': OCCLUDED + ['--set', 'env.packed_share=0.25'],
+    'turned_stems': OCCLUDED + ['--set', 'network.shared_stages=1'],
+    'default_6000': OCCLUDED + ['--set', 'train.total_actions=6000'],
+    'default_12000': OCCLUDED + ['--set', 'train.total_actions=12000'],
 }
 # variant -> the variant whose finished run it resumes to more actions. The same as training
 # that long in one go: nothing in the recipe reads the total (constant learning rate, exploration

@@ -4,8 +4,8 @@ part of one camera's view (`env.occluded_share`, beyond the paper), both chosen 
 study on validation cases (docs/results/recipe.md). The recipe is ahead of the paper text's on
 every validation suite and 1.4x as fast to train as the authors' whole recipe; the occluders
 lift grasp success under occlusion, also under occluders standing where training never puts
-them, and leave heaps and packed blocks where they were (intervals over seeds overlap). `paper_text` is the paper text's recipe; `authors`
-the authors' whole recipe."""
+them, and leave heaps and packed blocks where they were (intervals over seeds overlap).
+`paper_text` is the paper text's recipe; `authors` the authors' whole recipe."""
 import dataclasses
 
 from mvcoba_jax.config import Config
