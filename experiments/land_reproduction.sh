@@ -1,22 +1,32 @@
 #!/usr/bin/env bash
-# Lands a finished mvcoba-reproduce: its tables (both protocols) into docs/results/reproduction,
-# the tables they replace into docs/results/archive/reproduction-COMMIT (the commit that landed
-# them), and seed 0 of every method exported to pretrained/METHOD with its figures under each
-# protocol and the commit that trained it (params.npz and model.json: the ONNX graph is one
-# mvcoba-export away).
+# Lands an mvcoba-reproduce as its protocols finish: the tables of each finished protocol (its
+# comparison.md written) into docs/results/reproduction, the tables of an earlier training into
+# docs/results/archive/reproduction-COMMIT (the commit that landed them), and seed 0 of every
+# method exported to pretrained/METHOD with its figures under each landed protocol and the commit
+# that trained it (params.npz and model.json: the ONNX graph is one mvcoba-export away). Run it
+# again when the online protocol finishes: the same training's tables are refreshed in place.
 #   bash experiments/land_reproduction.sh WORKDIR TABLES TRAINED_AT_COMMIT
 set -euo pipefail
 cd "$(dirname "$0")/.."
 workdir=$1 tables=$2 commit=$3 dest=docs/results/reproduction
-[ -f "$tables/comparison.md" ] && [ -f "$tables/online/comparison.md" ] || {
-  echo "$tables: no comparison.md of both protocols: the reproduction has not finished" >&2; exit 2; }
-old=$(git log -1 --format=%h -- "$dest/comparison.md")
-git mv "$dest" "docs/results/archive/reproduction-$old"
-mkdir -p "$dest" && cp -r "$tables"/. "$dest"/
+[ -f "$tables/comparison.md" ] || {
+  echo "$tables: no comparison.md: the reproduction's frozen protocol has not finished" >&2; exit 2; }
+if [ "$(cat "$dest/trained-at" 2>/dev/null)" != "$commit" ]; then
+  old=$(git log -1 --format=%h -- "$dest/comparison.md")
+  git mv "$dest" "docs/results/archive/reproduction-$old"
+  mkdir -p "$dest"
+fi
+find "$tables" -maxdepth 1 -type f -exec cp {} "$dest"/ \;
+results=("$dest/results.json")
+if [ -f "$tables/online/comparison.md" ]; then
+  mkdir -p "$dest/online" && cp "$tables"/online/* "$dest/online/"
+  results+=("$dest/online/results.json")
+fi
+echo "$commit" > "$dest/trained-at"
 for run in "$workdir"/*-s0; do
   method=$(basename "$run" -s0)
   rm -rf "pretrained/$method"
   mvcoba-export --checkpoint "$run" --out "pretrained/$method" --commit "$commit" \
-    --results "$dest/results.json" "$dest/online/results.json"
+    --results "${results[@]}"
   rm "pretrained/$method/model.onnx"
 done
