@@ -113,12 +113,16 @@ class TrainConfig:
   # ('rule') or over both primitives' maps ('both'); every grasp also labelled at its rotation
   # turned half way (a parallel-jaw grasp is the same grasp turned by 180 degrees); each update
   # also trains on the B transitions stored this step, besides `batch_size` replayed ones.
+  # Beyond both: `quarter_turns` turns each replayed transition (states and action) by a random
+  # multiple of 90 degrees about the heightmap centre, teaching a network whose early stages see
+  # the state unturned (`network.shared_stages`) the symmetry that turned heightmaps build in.
   failed_grasp_reward: float = 0.5
   no_change_push_reward: float = 0.0
   bootstrap_no_change: bool = True
   future_max: str = 'rule'
   grasp_symmetry: bool = False
   fresh_in_batch: bool = False
+  quarter_turns: bool = False
   checkpoint_every: int = 25  # host iterations between checkpoints
   curve_window: int = 200  # attempts in the sliding window of the training curves
 
@@ -196,6 +200,10 @@ def validate(config: Config) -> Config:
   if train.grasp_symmetry and env.num_rotations % 2:
     raise ConfigError(f'train.grasp_symmetry needs an even env.num_rotations (the grasp turned '
                       f'half way); it is {env.num_rotations}')
+  if train.quarter_turns and env.num_rotations % 4:
+    raise ConfigError(f'train.quarter_turns needs env.num_rotations divisible by 4 (a quarter '
+                      f'turn of the state is a whole number of rotations); it is '
+                      f'{env.num_rotations}')
   if env.heap_half > scene.workspace_half:
     raise ConfigError(f'env.heap_half={env.heap_half!r} must not exceed scene.workspace_half='
                       f'{scene.workspace_half!r}')
@@ -399,7 +407,8 @@ RETIRED = {TrainConfig: ('max_consecutive_failures',)}
 # the current default): a saved config that lacks them gets that value, without a warning.
 LEGACY = {TrainConfig: {'target': 'network', 'failed_grasp_reward': 0.5,
                         'no_change_push_reward': 0.0, 'bootstrap_no_change': True,
-                        'future_max': 'rule', 'grasp_symmetry': False, 'fresh_in_batch': False},
+                        'future_max': 'rule', 'grasp_symmetry': False, 'fresh_in_batch': False,
+                        'quarter_turns': False},
           EnvConfig: {'drop': 'spread', 'heap_half': 0.125, 'occluded_share': 0.0,
                       'packed_share': 0.0},
           NetworkConfig: {'pad_to_diagonal': False, 'shared_stages': 0}}

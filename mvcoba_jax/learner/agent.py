@@ -134,6 +134,22 @@ def optimizer(train: TrainConfig) -> optax.GradientTransformation:
                      optax.sgd(train.learning_rate, momentum=train.momentum))
 
 
+def quarter_turned(batch, turns, num_rotations: int):
+  """`batch` (transitions with obs, next_obs, rotation, row, col) with each transition's states
+  turned by `turns` (B,) quarter turns about the heightmap centre, each a quarter turn as
+  `geometry.rotate_images(pi / 2)` makes (+x to +y), and its action with them: the pixel moves
+  with the maps and the rotation index grows by a quarter of `num_rotations`. Rewards and flags
+  are unchanged: a quarter-turned tabletop is the same tabletop."""
+  b, side = turns.shape[0], batch.obs.depth.shape[-1]
+  pick = lambda variants: jnp.stack(variants)[turns, jnp.arange(b)]
+  turn = lambda x: pick([jnp.rot90(x, k=-i, axes=(2, 3)) for i in range(4)])
+  row, col, last = batch.row, batch.col, side - 1
+  return batch.replace(
+      obs=jax.tree.map(turn, batch.obs), next_obs=jax.tree.map(turn, batch.next_obs),
+      rotation=(batch.rotation + turns * (num_rotations // 4)) % num_rotations,
+      row=pick([row, col, last - row, last - col]), col=pick([col, last - row, last - col, row]))
+
+
 def executed_loss(q_maps, params, batch, y, valid, config: Config):
   """Huber loss of Q at each transition's executed pixel against its target `y` (N,), summed
   over the `valid` ones; also the TD errors (N,). `q_maps(params, obs, rotations (N, K))`.

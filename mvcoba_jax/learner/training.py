@@ -141,7 +141,8 @@ class Trainer:
   def update(self, state: TrainState, key, enabled=True,
              fresh: tuple[replay_lib.Transition, jnp.ndarray] | None = None
              ) -> tuple[TrainState, jnp.ndarray]:
-    """One SGD step on a prioritised batch; a non-finite loss or parameter leaves all as it was.
+    """One SGD step on a prioritised batch (each replayed transition turned by random quarter
+    turns with `train.quarter_turns`); a non-finite loss or parameter leaves all as it was.
 
     `fresh`: (transitions, whether they are valid) trained on too, in the same step, after the
     sampled ones (`train.fresh_in_batch`); their priorities are not updated here, since each
@@ -152,7 +153,12 @@ class Trainer:
     step was refused or not enabled).
     """
     t = self.config.train
+    if t.quarter_turns:
+      key, k_turns = jax.random.split(key)
     index, batch, valid = replay_lib.sample(state.replay, key, t.batch_size, t.priority_exponent)
+    if t.quarter_turns:
+      turns = jax.random.randint(k_turns, (t.batch_size,), 0, 4)
+      batch = agent.quarter_turned(batch, turns, self.config.env.num_rotations)
     if fresh is not None:
       transitions, fresh_valid = fresh
       batch = jax.tree.map(lambda a, b: jnp.concatenate([a, b.astype(a.dtype)]), batch,

@@ -131,6 +131,24 @@ def test_loss_falls_on_a_fixed_replay_batch(trainer, trained):
   assert losses[-1] < 0.5 * losses[0], losses
 
 
+def test_quarter_turns_learn_from_turned_replayed_transitions(trainer, trained):
+  """`train.quarter_turns`: the update trains on quarter-turned copies of what it samples (the
+  turns themselves: tests/unit/test_networks.py), so it moves the parameters elsewhere than the
+  plain update from the same state and key, and its loss still falls on a fixed draw."""
+  state, _ = trained
+  update = jax.jit(Trainer(resolve(TINY, ['train.quarter_turns=true'])).update)
+  key = jax.random.PRNGKey(3)
+  plain, _ = jax.jit(trainer.update)(state, key)
+  losses = []
+  for _ in range(25):
+    state, loss = update(state, key)
+    losses.append(float(loss))
+  assert losses[-1] < 0.5 * losses[0], losses
+  first = jax.tree.leaves(update(trained[0], key)[0].params)
+  assert any(np.abs(np.asarray(a) - np.asarray(b)).max() > 1e-6
+             for a, b in zip(first, jax.tree.leaves(plain.params)))
+
+
 def test_non_finite_loss_leaves_parameters_untouched(trainer, trained):
   state, _ = trained
   poisoned = state.replace(replay=state.replay.replace(

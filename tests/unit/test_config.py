@@ -136,7 +136,7 @@ def test_saved_config_without_the_recipe_fields_keeps_the_paper_text_recipe():
   those values, without a warning, whatever the presets now choose."""
   saved = to_dict(resolve('authors', ['network.pad_to_diagonal=true', 'network.shared_stages=2']))
   for name in ('failed_grasp_reward', 'no_change_push_reward', 'bootstrap_no_change',
-               'future_max', 'grasp_symmetry', 'fresh_in_batch'):
+               'future_max', 'grasp_symmetry', 'fresh_in_batch', 'quarter_turns'):
     del saved['train'][name]
   del saved['env']['drop'], saved['env']['occluded_share'], saved['env']['packed_share']
   del saved['network']['pad_to_diagonal'], saved['network']['shared_stages']
@@ -151,6 +151,8 @@ def test_saved_config_without_the_recipe_fields_keeps_the_paper_text_recipe():
 def test_recipe_settings_that_do_not_fit_together_are_refused():
   with pytest.raises(ConfigError, match='grasp_symmetry needs an even env.num_rotations'):
     resolve('default', ['train.grasp_symmetry=true', 'env.num_rotations=7'])
+  with pytest.raises(ConfigError, match='quarter_turns needs env.num_rotations divisible by 4'):
+    resolve('default', ['train.quarter_turns=true', 'env.num_rotations=6'])
   import dataclasses
 
   from mvcoba_jax.config import validate

@@ -11,8 +11,10 @@ from flax import nnx
 
 from mvcoba_jax import methods
 from mvcoba_jax.config import NetworkConfig
-from mvcoba_jax.learner import networks
+from mvcoba_jax.learner import agent, networks
+from mvcoba_jax.learner.replay import Transition
 from mvcoba_jax.methods import names as method_names
+from mvcoba_jax.perception import Observation
 from mvcoba_jax.sim import primitives
 from mvcoba_jax.sim.geometry import rotate_images
 
@@ -177,6 +179,38 @@ def test_padded_maps_turn_with_the_state(states):
   q_turned = np.asarray(forward(state, _quarter_turn(color, 2), _quarter_turn(depth, 2),
                                 k + ROTATIONS // 4))
   np.testing.assert_allclose(q_turned, _quarter_turn(q, 3), atol=1e-4)
+
+
+def test_quarter_turned_transitions_score_as_they_were(states):
+  """`train.quarter_turns`: a transition turned by 0-3 quarter turns has the executed Q it had
+  under turned heightmaps (which hold the symmetry exactly): the action moved with the state.
+  Four turns give the batch back. Turning features gives the symmetry up, so there the
+  turned transitions are new data."""
+  color, depth = states
+  n = 4 * BATCH
+  obs = Observation(color=jnp.tile(color, (4, 1, 1, 1, 1)), depth=jnp.tile(depth, (4, 1, 1, 1)),
+                    seen=jnp.tile(depth > 0.02, (4, 1, 1, 1)))
+  pixel = jax.random.randint(jax.random.key(3), (3, n), 0, SIDE)
+  batch = Transition(obs=obs, next_obs=obs, primitive=pixel[0] % 2, rotation=pixel[1] % ROTATIONS,
+                     row=pixel[1], col=pixel[2], reward=jnp.zeros(n), done=jnp.zeros(n, bool),
+                     changed=jnp.ones(n, bool), next_value=jnp.zeros(n))
+  turns = jnp.repeat(jnp.arange(4), BATCH)
+  turned = agent.quarter_turned(batch, turns, ROTATIONS)
+  assert turned.rotation.tolist() == ((batch.rotation + 4 * turns) % ROTATIONS).tolist()
+  again = turned
+  for _ in range(3):
+    again = agent.quarter_turned(again, turns, ROTATIONS)
+  jax.tree.map(np.testing.assert_array_equal, again, batch)
+  jax.tree.map(np.testing.assert_array_equal, agent.quarter_turned(batch, 0 * turns, ROTATIONS),
+               batch)
+  executed = {}
+  for name, config in (('heightmaps', TINY), ('features', SHARED)):
+    state, forward = _forward(config)
+    executed[name] = [np.asarray(networks.executed_q(
+        forward(state, b.obs.color, b.obs.depth, b.rotation[:, None]), b.primitive, b.row, b.col))
+        for b in (batch, turned)]
+  np.testing.assert_allclose(*executed['heightmaps'], atol=1e-4)
+  assert np.abs(np.subtract(*executed['features'])[BATCH:]).max() > 1e-3
 
 
 def test_rotating_by_zero_is_identity():
