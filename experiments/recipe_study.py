@@ -31,8 +31,10 @@ VALIDATION = ROOT / 'docs' / 'results' / 'recipe' / 'validation'
 # recipe (the default preset when the screen began); the `nofresh_` variants from the default
 # preset the screen chose (the authors' recipe without the update's fresh transitions); `width_`
 # and `turned_stems` make today's default's acting forward cheaper (a narrower trunk, the stems
-# run once per state: benchmarks/acting_forward.py); `packed` adds packed training drops, for
-# the packed validation cases.
+# run once per state: benchmarks/acting_forward.py), `shared2_quarter_turns` with replayed
+# transitions turned by quarter turns to teach it the symmetry it gives up; `quarter_turns` the
+# same turns on today's network; `packed` adds packed training drops, for the packed validation
+# cases.
 PAPER_TEXT = ['--config', 'paper_text']
 NOFRESH = ['--config', 'authors', '--set', 'train.fresh_in_batch=false']
 OCCLUDED = NOFRESH + ['--set', 'env.occluded_share=0.25']  # today's default preset, spelt out
@@ -57,6 +59,9 @@ VARIANTS = {
                                                '--set', 'network.shared_stages=1'],
     'packed': OCCLUDED + ['--set', 'env.packed_share=0.25'],
     'turned_stems': OCCLUDED + ['--set', 'network.shared_stages=1'],
+    'shared2_quarter_turns': OCCLUDED + ['--set', 'network.shared_stages=2',
+                                         '--set', 'train.quarter_turns=true'],
+    'quarter_turns': OCCLUDED + ['--set', 'train.quarter_turns=true'],
     'default_6000': OCCLUDED + ['--set', 'train.total_actions=6000'],
     'default_12000': OCCLUDED + ['--set', 'train.total_actions=12000'],
 }
