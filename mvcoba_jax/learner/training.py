@@ -153,8 +153,7 @@ class Trainer:
     step was refused or not enabled).
     """
     t = self.config.train
-    if t.quarter_turns:
-      key, k_turns = jax.random.split(key)
+    key, k_turns = jax.random.split(key) if t.quarter_turns else (key, None)
     index, batch, valid = replay_lib.sample(state.replay, key, t.batch_size, t.priority_exponent)
     if t.quarter_turns:
       turns = jax.random.randint(k_turns, (t.batch_size,), 0, 4)

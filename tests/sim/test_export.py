@@ -7,6 +7,7 @@ import pathlib
 import shutil
 import subprocess
 import sys
+import warnings
 
 import jax
 import jax.numpy as jnp
@@ -14,6 +15,7 @@ import numpy as np
 import pytest
 from flax import nnx
 
+import mvcoba_jax
 from mvcoba_jax import export, methods, perception, policy
 from mvcoba_jax.cli import export as export_cli
 from mvcoba_jax.cli import viz as viz_cli
@@ -300,10 +302,8 @@ def test_shipped_pretrained_policy_fits_the_current_network(folder):
 
 
 def test_every_shipped_policy_evaluates(tmp_path):
-  """What docs/usage.md runs on pretrained/*: each shipped policy loads without a warning and
+  """What docs/usage.md runs on pretrained/*/: each shipped policy loads without a warning and
   acts in a case (one run, a few actions, every policy in one call)."""
-  import warnings
-  import mvcoba_jax
   folders = sorted(str(p) for p in (ROOT / 'pretrained').iterdir() if p.is_dir())
   case = ROOT / 'mvcoba_jax' / 'suites' / 'ordered' / 'ordered-00.scn'
   with warnings.catch_warnings():
