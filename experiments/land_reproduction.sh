@@ -16,7 +16,7 @@ if [ "$(cat "$dest/trained-at" 2>/dev/null)" != "$commit" ]; then
   git mv "$dest" "docs/results/archive/reproduction-$old"
   mkdir -p "$dest"
 fi
-find "$tables" -maxdepth 1 -type f -exec cp {} "$dest"/ \;
+find "$tables" -maxdepth 1 -type f ! -name '.*' -exec cp {} "$dest"/ \;
 results=("$dest/results.json")
 if [ -f "$tables/online/comparison.md" ]; then
   mkdir -p "$dest/online" && cp "$tables"/online/* "$dest/online/"
