@@ -36,9 +36,9 @@ def test_the_readme_results_are_the_reproductions_tables():
   protocol (frozen, and online once it has finished), row for row and in order: a new
   reproduction is not half taken over."""
   folder = ROOT / 'docs' / 'results' / 'reproduction'
-  comparisons = [folder / 'comparison.md', folder / 'online' / 'comparison.md']
+  frozen, online = folder / 'comparison.md', folder / 'online' / 'comparison.md'
   readme = [line for line in (ROOT / 'README.md').read_text().splitlines() if line.startswith('|')]
-  for comparison in [comparisons[0]] + [c for c in comparisons[1:] if c.exists()]:
+  for comparison in [frozen] + ([online] if online.exists() else []):
     rows = [line for line in comparison.read_text().splitlines() if line.startswith('|')]
     at = next((i for i in range(len(readme)) if readme[i:i + len(rows)] == rows), None)
     assert rows and at is not None, 'README.md results differ from ' + str(comparison)

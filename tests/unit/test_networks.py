@@ -190,9 +190,9 @@ def test_quarter_turned_transitions_score_as_they_were(states):
   n = 4 * BATCH
   obs = Observation(color=jnp.tile(color, (4, 1, 1, 1, 1)), depth=jnp.tile(depth, (4, 1, 1, 1)),
                     seen=jnp.tile(depth > 0.02, (4, 1, 1, 1)))
-  pixel = jax.random.randint(jax.random.key(3), (3, n), 0, SIDE)
-  batch = Transition(obs=obs, next_obs=obs, primitive=pixel[0] % 2, rotation=pixel[1] % ROTATIONS,
-                     row=pixel[1], col=pixel[2], reward=jnp.zeros(n), done=jnp.zeros(n, bool),
+  draws = jax.random.randint(jax.random.key(3), (4, n), 0, SIDE)
+  batch = Transition(obs=obs, next_obs=obs, primitive=draws[0] % 2, rotation=draws[1] % ROTATIONS,
+                     row=draws[2], col=draws[3], reward=jnp.zeros(n), done=jnp.zeros(n, bool),
                      changed=jnp.ones(n, bool), next_value=jnp.zeros(n))
   turns = jnp.repeat(jnp.arange(4), BATCH)
   turned = agent.quarter_turned(batch, turns, ROTATIONS)
