@@ -441,6 +441,10 @@ def _evaluate(cases_of, labels, sources, settings, report, base, protocol, runs,
         rows[label] = _row(suite, cases, label, source, base, protocol, runs, max_actions, seed,
                            out, save_visuals, video, progress) | {
                                'settings': settings[suite, label]}
+        # A row's programs hold its policy and tabletop as static arguments, so no other row can
+        # reuse them; kept, they add about a thousand memory mappings a row until LLVM cannot
+        # map another (a process evaluating 40 to 60 rows crashed so).
+        jax.clear_caches()
         report_lib.write_report(report_lib.in_order(report, settings), out)
         say(f'  done in {rows[label]["wall_s"]:.0f} s', flush=True)
       for text in report_lib.suite_tables(suite, report_lib.in_order(report, settings)[suite]):

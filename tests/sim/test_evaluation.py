@@ -465,6 +465,7 @@ def test_evaluate_and_join_as_library_calls(setup, tmp_path):
                                runs=1, max_actions=MAX_ACTIONS, out=tmp_path / 'o',
                                progress=False)
   row = report[str(folder)]['baseline:heuristic']
+  assert runner.advance._cache_size() == 0  # the row's programs released, not kept for good
   assert set(row['cases']) == {'pair', 'three'} and row['settings']['protocol'] == 'frozen'
   assert json.loads((tmp_path / 'o' / 'results.json').read_text())[str(folder)][
       'baseline:heuristic']['runs'] == row['runs']
