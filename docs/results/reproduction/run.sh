@@ -6,4 +6,5 @@ export PYTHONPATH=/work/repro-tree PATH=/work/main/.venv/bin:$PATH
 echo "start $(date -u +%FT%TZ) commit $(git rev-parse --short HEAD)" >> /work/reproduction/runs.txt
 # PROTOCOLS=frozen runs the frozen protocol alone (its comparison.md written when it ends)
 mvcoba-reproduce --workdir /work/reproduction/runs --out /work/reproduction/tables --protocols ${PROTOCOLS:-frozen online}
-echo "end $(date -u +%FT%TZ) rc $?" >> /work/reproduction/runs.txt
+rc=$?  # before the date's command substitution resets it
+echo "end $(date -u +%FT%TZ) rc $rc" >> /work/reproduction/runs.txt
