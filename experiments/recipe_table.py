@@ -39,15 +39,25 @@ def cell(entry) -> str:
   return f'{point:.1f}' if math.isnan(low) else f'{point:.1f} [{low:.1f}, {high:.1f}]'
 
 
+def by_suite_name(folders: list[str]) -> dict:
+  """The rows of each evaluation folder joined by the suite's folder name, each labelled with its
+  folder: a study resumed from another checkout names another path for the same suite, and its
+  seeds must still meet in one row."""
+  merged = {}
+  for folder in folders:
+    for suite, rows in report.joined_report([folder]).items():
+      merged.setdefault(pathlib.Path(suite).name, {}).update(
+          {f'{label} ({pathlib.Path(folder).name})': row for label, row in rows.items()})
+  return merged
+
+
 def table(work: pathlib.Path, metrics=METRICS) -> str:
   evaluations = {}
   for folder in sorted((work / 'eval').iterdir()):
     if (folder / 'done').is_file():
       evaluations.setdefault(folder.name.rsplit('-s', 1)[0], []).append(str(folder))
   minutes = training_minutes(work / 'study.jsonl')
-  # by the suite's folder name: studies run from other checkouts name other paths
-  joined = {variant: {pathlib.Path(suite).name: rows
-                      for suite, rows in report.joined_report(evaluations[variant]).items()}
+  joined = {variant: by_suite_name(evaluations[variant])
             for variant in VARIANTS if variant in evaluations}
   suites = list(dict.fromkeys(suite for by_suite in joined.values() for suite in by_suite))
   lines = []
