@@ -331,6 +331,7 @@ def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, ru
   row was evaluated with. `resume` keeps `out`'s rows of the same settings and evaluates the
   rest; an `out` holding results is refused unless `resume` or `overwrite`. A policy evaluates
   in its own config with `overrides` applied (`config.evaluated`); the baseline in `config`.
+  JAX's compiled programs are released after each row (`jax.clear_caches`), the caller's too.
   Raises EvaluationError before anything compiles when an input cannot serve.
   """
   if protocol not in PROTOCOLS:
