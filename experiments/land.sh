@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Copies a study's finished evaluations and its log into docs/results/recipe/STAGE (screen by
 # default; the layout recipe_table.py reads: eval/NAME/results.json, study.jsonl) and writes its
-# table beside them.
+# table beside them. The log joins the one landed before (a study resumed in another sitting
+# with --landed writes a new one), each entry once.
 #   bash experiments/land.sh /work/study-recipe [screen|confirm]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,5 +13,7 @@ for d in "$study"/eval/*/; do
   mkdir -p "$screen/eval/$(basename "$d")"
   cp "$d/results.json" "$d/results.md" "$d/done" "$screen/eval/$(basename "$d")/"
 done
-cp "$study/study.jsonl" "$screen/"
+touch "$screen/study.jsonl"
+cat "$screen/study.jsonl" "$study/study.jsonl" | awk '!seen[$0]++' > "$screen/.study.jsonl"
+mv "$screen/.study.jsonl" "$screen/study.jsonl"
 python experiments/recipe_table.py --workdir "$screen" > "$screen/table.md"

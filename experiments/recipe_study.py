@@ -3,12 +3,15 @@ from the paper's text, and the authors' whole recipe, trained over seeds and eva
 validation suites (generated apart from the shipped ones), each step resumable; and the chosen
 recipe trained longer.
 
-  python experiments/recipe_study.py [--variants NAME ...] [--seeds 0 1] [--runs 3]
-                                     [--workdir runs/recipe] [--suites DIR ...]
+  python experiments/recipe_study.py [--variants NAME ...] [--methods M ...] [--seeds 0 1]
+                                     [--runs 3] [--workdir runs/recipe] [--suites DIR ...]
+                                     [--landed DIR]
 
-Every run trains with `mvcoba-train` into WORKDIR/VARIANT/mvcoba-sSEED and is evaluated with
-`mvcoba-eval` into WORKDIR/eval/VARIANT-sSEED; a run already trained or evaluated is passed over,
-so the study continues where a killed one stopped. A variant that continues another (`CONTINUES`)
+Every run trains with `mvcoba-train --method M` into WORKDIR/VARIANT/M-sSEED and is evaluated
+with `mvcoba-eval` into WORKDIR/eval/VARIANT-sSEED (MV-COBA) or WORKDIR/eval/VARIANT-M-sSEED; a
+run already trained or evaluated is passed over, so the study continues where a killed one
+stopped, and with `--landed DIR` (a study's folder under docs/results, as experiments/land.sh
+writes it) so does a run whose evaluation landed there from an earlier sitting. A variant that continues another (`CONTINUES`)
 starts from a copy of that variant's finished run of the same seed and resumes it to its own
 total. Then `mvcoba-eval --tables` joins every
 evaluation into WORKDIR/tables, whose rows group by training config: one interval per variant
@@ -25,7 +28,7 @@ import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-VALIDATION = ROOT / 'docs' / 'results' / 'recipe' / 'validation'
+VALIDATION = ROOT / 'docs' / 'results' / 'validation'
 
 # variant -> mvcoba-train arguments. The single changes are screened from the paper text's
 # recipe (the default preset when the screen began); the `nofresh_` variants from the default
@@ -63,11 +66,20 @@ VARIANTS = {
                                          '--set', 'train.quarter_turns=true'],
     'default_6000': OCCLUDED + ['--set', 'train.total_actions=6000'],
     'default_12000': OCCLUDED + ['--set', 'train.total_actions=12000'],
+    # The presets of the day at the reproduction's 3000 actions, for each method's best recipe.
+    'preset_paper_text': ['--config', 'paper_text'],
+    'preset_authors': ['--config', 'authors'],
+    'preset_default': ['--config', 'default', '--set', 'train.total_actions=3000'],
 }
 # variant -> the variant whose finished run it resumes to more actions. The same as training
 # that long in one go: nothing in the recipe reads the total (constant learning rate, exploration
 # decayed over the first 800 actions), and a checkpoint holds the whole training state.
 CONTINUES = {'default_6000': 'nofresh_occlusion', 'default_12000': 'default_6000'}
+
+
+def run_name(variant: str, method: str, seed: int) -> str:
+  """A run's name: VARIANT-sSEED for MV-COBA (the study's first method), else VARIANT-M-sSEED."""
+  return f'{variant}-s{seed}' if method == 'mvcoba' else f'{variant}-{method}-s{seed}'
 
 
 def commit() -> str:
@@ -94,43 +106,49 @@ def run(command: list[str], log: pathlib.Path, what: str) -> bool:
 def main(argv=None) -> int:
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--variants', nargs='+', default=list(VARIANTS), choices=list(VARIANTS))
+  parser.add_argument('--methods', nargs='+', default=['mvcoba'])
   parser.add_argument('--seeds', nargs='+', type=int, default=[0, 1])
   parser.add_argument('--runs', type=int, default=3, help='evaluation runs per case')
   parser.add_argument('--workdir', default='runs/recipe')
   parser.add_argument('--suites', nargs='+', default=[str(VALIDATION / s) for s in
                                                       ('val-random', 'val-ordered',
-                                                       'val-occluded', 'val-occluded-moved')])
+                                                       'val-occluded')])
+  parser.add_argument('--landed', help='a landed study folder whose evaluations are done')
   args = parser.parse_args(argv)
   work = (ROOT / args.workdir).resolve()
   work.mkdir(parents=True, exist_ok=True)
   log = work / 'study.jsonl'
   evaluations = []
+  landed = pathlib.Path(args.landed).resolve() if args.landed else None
   for seed in args.seeds:  # every variant's first seed before any second
     for variant in args.variants:
-      name = f'{variant}-s{seed}'
-      train_dir, eval_dir = work / variant / f'mvcoba-s{seed}', work / 'eval' / name
-      if variant in CONTINUES and not train_dir.exists():
-        start = work / CONTINUES[variant] / f'mvcoba-s{seed}'
-        if not (start / 'eval_summary.json').is_file():
-          print(f'{name}: waits for {start} to finish', flush=True)
+      for method in args.methods:
+        name = run_name(variant, method, seed)
+        if landed and (landed / 'eval' / name / 'done').is_file():
           continue
-        partial = train_dir.with_name(train_dir.name + '.partial')  # a killed copy is redone
-        shutil.rmtree(partial, ignore_errors=True)
-        shutil.copytree(start, partial, ignore=shutil.ignore_patterns('eval_summary.json'))
-        partial.rename(train_dir)
-      if not (train_dir / 'eval_summary.json').is_file():
-        if not run(['mvcoba-train', *VARIANTS[variant], '--seed', str(seed), '--workdir',
-                    str(train_dir), '--eval-actions', '1']
-                   + (['--resume'] if (train_dir / 'checkpoints').is_dir() else ['--overwrite']),
-                   log, f'train-{name}'):
-          continue
-      if not (eval_dir / 'results.json').is_file() or not (eval_dir / 'done').is_file():
-        if not run(['mvcoba-eval', '--checkpoint', str(train_dir), '--suite', *args.suites,
-                    '--runs', str(args.runs), '--out', str(eval_dir), '--resume'],
-                   log, f'eval-{name}'):
-          continue
-        (eval_dir / 'done').touch()
-      evaluations.append(str(eval_dir))
+        train_dir, eval_dir = work / variant / f'{method}-s{seed}', work / 'eval' / name
+        if variant in CONTINUES and not train_dir.exists():
+          start = work / CONTINUES[variant] / f'{method}-s{seed}'
+          if not (start / 'eval_summary.json').is_file():
+            print(f'{name}: waits for {start} to finish', flush=True)
+            continue
+          partial = train_dir.with_name(train_dir.name + '.partial')  # a killed copy is redone
+          shutil.rmtree(partial, ignore_errors=True)
+          shutil.copytree(start, partial, ignore=shutil.ignore_patterns('eval_summary.json'))
+          partial.rename(train_dir)
+        if not (train_dir / 'eval_summary.json').is_file():
+          if not run(['mvcoba-train', *VARIANTS[variant], '--method', method, '--seed', str(seed),
+                      '--workdir', str(train_dir), '--eval-actions', '1']
+                     + (['--resume'] if (train_dir / 'checkpoints').is_dir() else ['--overwrite']),
+                     log, f'train-{name}'):
+            continue
+        if not (eval_dir / 'results.json').is_file() or not (eval_dir / 'done').is_file():
+          if not run(['mvcoba-eval', '--checkpoint', str(train_dir), '--suite', *args.suites,
+                      '--runs', str(args.runs), '--out', str(eval_dir), '--resume'],
+                     log, f'eval-{name}'):
+            continue
+          (eval_dir / 'done').touch()
+        evaluations.append(str(eval_dir))
   if evaluations:
     run(['mvcoba-eval', '--tables', *evaluations, '--out', str(work / 'tables'), '--overwrite'],
         log, 'tables')

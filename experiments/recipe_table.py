@@ -1,6 +1,7 @@
-"""The recipe study's table: per variant, each validation suite's grasp success, completion and
-objects picked, mean over seeds and cases with the 95% stratified bootstrap interval over seeds,
-and the training time, from what `recipe_study.py` wrote.
+"""The recipe study's table: per variant (and method, where the study trained several), each
+validation suite's grasp success, completion and objects picked, mean over seeds and cases with
+the 95% t interval over the per-seed means (`evaluation/intervals.py`), and the training time,
+from what `recipe_study.py` wrote.
 
   python experiments/recipe_table.py [--workdir runs/recipe] [--metrics grasp_success ...]
 
@@ -57,8 +58,9 @@ def table(work: pathlib.Path, metrics=METRICS) -> str:
     if (folder / 'done').is_file():
       evaluations.setdefault(folder.name.rsplit('-s', 1)[0], []).append(str(folder))
   minutes = training_minutes(work / 'study.jsonl')
-  joined = {variant: by_suite_name(evaluations[variant])
-            for variant in VARIANTS if variant in evaluations}
+  order = lambda row: (list(VARIANTS).index(row.split('-')[0]), row)
+  joined = {row: by_suite_name(evaluations[row])
+            for row in sorted(evaluations, key=order) if row.split('-')[0] in VARIANTS}
   suites = list(dict.fromkeys(suite for by_suite in joined.values() for suite in by_suite))
   lines = []
   for variant, by_suite in joined.items():

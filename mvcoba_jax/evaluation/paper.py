@@ -11,7 +11,7 @@ PAPER_NAMES = {'mvcoba': 'MV-COBA', 'mvcoba_2fcn': 'MV-COBA-2FCNs', 'vpg': 'VPG'
                'grasp_only': 'DRGP', 'mvp': 'MVP', 'cpg': 'CPG'}
 
 # suite -> paper method -> metric -> value (%); the paper's completion counts objects, so it is
-# held against our objects_picked.
+# held against our objects_picked; VPG's counts runs cleared, held against our completion.
 RESULTS = {
     'random': {
         'MV-COBA': {'grasp_success': 83.6, 'action_efficiency': 75.0, 'completion': 94.0},
@@ -34,6 +34,8 @@ RESULTS = {
         'CPG': {'grasp_success': 29.7, 'completion': 0.0},
         'DRGP': {'grasp_success': 26.3, 'completion': 0.0},
         'MVP': {'grasp_success': 44.3, 'completion': 0.0}},
+    # VPG (Zeng et al., IROS 2018), Table II: its 11 public hard cases, runs completed.
+    'vpg': {'VPG': {'grasp_success': 77.2, 'action_efficiency': 60.1, 'runs_completed': 82.7}},
 }
 # (our metric, the paper's figure it is held against, the column). The paper's grasp success and
 # action efficiency are means over completed runs of each run's rate (the authors' evaluate.py):
@@ -43,7 +45,8 @@ COLUMNS = (('grasp_success', 'grasp_success', 'grasp success'),
            ('action_efficiency', 'action_efficiency', 'action efficiency'),
            ('action_efficiency_per_run', 'action_efficiency',
             'action efficiency per completed run'),
-           ('objects_picked', 'completion', 'objects picked (paper: completion)'))
+           ('objects_picked', 'completion', 'objects picked (paper: completion)'),
+           ('completion', 'runs_completed', 'runs completed'))
 
 
 def paper_name(group: str) -> str:
@@ -54,11 +57,12 @@ def paper_name(group: str) -> str:
 
 
 def comparison(suite: str, ours: dict[str, dict]) -> str:
-  """Markdown: per method, our mean [95% CI over seeds] and the paper's figure, per metric.
+  """Markdown: per method, our mean [95% CI over seeds] and the paper's figure, per metric, and
+  each seed's grasp success.
 
   `ours` is `report.seed_intervals` of the suite (method -> metric -> (point, low, high))."""
   head = ('| method | seeds | ' + ' | '.join(f'{label}: ours | paper' for *_, label in COLUMNS)
-          + ' |\n|---|---|' + '---|---|' * len(COLUMNS))
+          + ' | grasp success per seed |\n|---|---|' + '---|---|' * len(COLUMNS) + '---|')
   lines = [head]
   paper = RESULTS.get(suite, {})
   for method, entry in ours.items():
@@ -70,29 +74,32 @@ def comparison(suite: str, ours: dict[str, dict]) -> str:
                                       f'{value[0]:.1f} [{value[1]:.1f}, {value[2]:.1f}]')
       theirs = paper.get(name, {}).get(paper_key)
       cells += [ci, '-' if theirs is None else f'{theirs:.1f}']
+    cells.append(report.per_seed_cell(entry['per_seed']['grasp_success']))
     lines.append(f'| {name} ({method}) | {entry["seeds"]} | ' + ' | '.join(cells) + ' |')
   for name, figures in paper.items():
     if name not in {PAPER_NAMES.get(report.method_of(m)) for m in ours}:
       cells = []
       for _, paper_key, _ in COLUMNS:
         cells += ['-', '-' if paper_key not in figures else f'{figures[paper_key]:.1f}']
-      lines.append(f'| {name} (not run) | - | ' + ' | '.join(cells) + ' |')
+      lines.append(f'| {name} (not run) | - | ' + ' | '.join(cells) + ' | - |')
   return '\n'.join(lines)
 
 
 def separations(ours: dict[str, dict]) -> str:
   """Markdown: per metric, which methods beat which in a suite, the only claims we make: their
-  intervals over seeds are disjoint (`intervals.separated`). Pairs not named are not
-  distinguishable at this sample size."""
-  lines = []
+  intervals over seeds are disjoint with `intervals.CLAIM_SEEDS` seeds or more behind each
+  (`intervals.separated`). Pairs not named are not distinguishable at this sample size."""
+  few = sorted({paper_name(m) for m, e in ours.items() if e['seeds'] < intervals.CLAIM_SEEDS})
+  lines = [f'- fewer than {intervals.CLAIM_SEEDS} seeds, so no claim about: {", ".join(few)} '
+           '(their per-seed means are above)'] if few else []
   for key, label in (('grasp_success', 'grasp success'), ('completion', 'completion'),
                      ('objects_picked', 'objects picked')):
-    scored = sorted(((e[key], m) for m, e in ours.items() if e.get(key) is not None),
-                    key=lambda pair: -pair[0][0])
+    scored = sorted(((e[key], e['seeds'], m) for m, e in ours.items() if e.get(key) is not None),
+                    key=lambda entry: -entry[0][0])
     beats = []
-    for i, (high, method) in enumerate(scored):
-      below = [paper_name(m) for low, m in scored[i + 1:]
-               if intervals.separated(high, low)]
+    for i, (high, seeds, method) in enumerate(scored):
+      below = [paper_name(m) for low, others, m in scored[i + 1:]
+               if intervals.separated(high, low, (seeds, others))]
       if below:
         beats.append(f'{paper_name(method)} > {", ".join(below)}')
     lines.append(f'- {label}: ' + ('; '.join(beats) if beats else

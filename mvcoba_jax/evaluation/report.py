@@ -19,6 +19,8 @@ METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action
            ('grasp_success_per_run', 'grasp success, mean per completed run (%)'),
            ('action_efficiency_per_run', 'action efficiency, mean per completed run (%)'),
            ('repeated_failures', 'repeated failed actions per run'))
+# What each metric can take: rates in %, the others counts or ratios.
+RANGES = {key: (0.0, 100.0) if label.endswith('(%)') else (0.0, math.inf) for key, label in METRICS}
 
 
 class ResultsError(ValueError):
@@ -83,7 +85,8 @@ def suite_tables(suite: str, rows: dict[str, dict]) -> list[str]:
   tables = [f'### {suite}: {label}\n\n' + table(rows, key, label, cases) for key, label in METRICS]
   over_seeds = seed_intervals(rows)
   if over_seeds:
-    tables.insert(0, f'### {suite}: over training seeds, mean [95% CI]\n\n'
+    tables.insert(0, f'### {suite}: over training seeds, mean [95% t interval over '
+                  'the per-seed means]\n\n'
                   + interval_table(over_seeds))
   return tables
 
@@ -148,29 +151,38 @@ def training_groups(rows: dict[str, dict]) -> dict[str, list[str]]:
 
 def seed_intervals(rows: dict[str, dict], minimum: int = 2) -> dict[str, dict]:
   """Per group of `training_groups` evaluated from `minimum` or more checkpoints (training seeds):
-  each metric's mean over seeds and cases with its 95% stratified bootstrap interval
-  (`intervals.interval`), over the cases every checkpoint ran; None where a metric is undefined
-  in some case."""
+  each metric's mean over seeds and cases with its 95% interval over seeds
+  (`intervals.interval`) and each seed's mean (`per_seed`), over the cases every checkpoint ran;
+  None where a metric is undefined in some case."""
   out = {}
   for group, labels in training_groups(rows).items():
     results = [rows[label] for label in labels]
     if len(results) < minimum:
       continue
     cases = [c for c in results[0]['cases'] if all(c in r['cases'] for r in results)]
-    entry = {'seeds': len(results), 'cases': len(cases)}
+    entry = {'seeds': len(results), 'cases': len(cases), 'per_seed': {}}
     for key, _ in METRICS:
       scores = np.array([[r['cases'][c][key] for c in cases] for r in results], np.float64)
-      entry[key] = intervals.interval(scores) if np.isfinite(scores).all() else None
+      finite = np.isfinite(scores).all()
+      entry[key] = intervals.interval(scores, within=RANGES[key]) if finite else None
+      entry['per_seed'][key] = intervals.seed_means(scores).tolist() if finite else None
     out[group] = entry
   return out
 
 
+def per_seed_cell(values) -> str:
+  """Each seed's mean, in seed order ('-' where undefined)."""
+  return '-' if values is None else ' / '.join(f'{v:.1f}' for v in values)
+
+
 def interval_table(over_seeds: dict[str, dict]) -> str:
-  head = ('| method | seeds | ' + ' | '.join(label for _, label in METRICS) + ' |\n|---|---|'
-          + '---|' * len(METRICS))
-  cell = lambda v: '-' if v is None else f'{v[0]:.1f} [{v[1]:.1f}, {v[2]:.1f}]'
+  head = ('| method | seeds | ' + ' | '.join(label for _, label in METRICS)
+          + ' | grasp success per seed |\n|---|---|' + '---|' * (len(METRICS) + 1))
+  cell = lambda v: '-' if v is None else (f'{v[0]:.1f}' if math.isnan(v[1]) else
+                                          f'{v[0]:.1f} [{v[1]:.1f}, {v[2]:.1f}]')
   return '\n'.join([head] + [f'| {m} | {e["seeds"]} | ' + ' | '.join(cell(e[k]) for k, _ in METRICS)
-                             + ' |' for m, e in over_seeds.items()])
+                             + f' | {per_seed_cell(e["per_seed"]["grasp_success"])} |'
+                             for m, e in over_seeds.items()])
 
 
 def scored(by_case: dict[str, list[metrics.RunLog]], wall_s: float) -> dict:

@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from mvcoba_jax.sim import cameras, physics, primitives, shapes
+from mvcoba_jax.sim import cameras, occluders, physics, primitives, shapes
 from mvcoba_jax.sim.config import TabletopConfig
 from mvcoba_jax.sim.geometry import quat_mul, yaw_quat
 from mvcoba_jax.sim.physics import SimState
@@ -23,12 +23,6 @@ PLACEMENT_TRIES = 16  # candidate spots per object and drop layer
 PLACEMENT_GAP = 0.004  # clearance between footprint circles of objects dropped in one layer
 PACKED_GAP = 0.001  # between the footprints of packed objects, as in the ordered suite
 PACKED_ROW = (0.10, 0.20)  # length of a packed layout's rows, drawn (m)
-# Where `env.occluded_share` puts an occluder, in the frame of the camera it hides (x towards the
-# camera's horizontal position, as a fraction of its distance; y sideways; z height, m): slot 0
-# hides the whole workspace and slot 1 a part, as in the occluded suite's cases.
-OCCLUDE_WHOLE = (0.857, 0.0, 0.49)
-OCCLUDE_PART = (0.786, 0.036, 0.47)
-PART_SHIFT = 0.02  # the partial occluder goes to either side, shifted by up to this (m)
 
 
 @struct.dataclass
@@ -235,30 +229,21 @@ class Tabletop:
     return pos, quat
 
   def drawn_occluders(self, key):
-    """Occluder poses of a random drop: with probability `env.occluded_share`, one camera (drawn)
-    hidden wholly by slot 0 or, with a second slot, as often partly by slot 1 on a drawn side
-    (`OCCLUDE_WHOLE`, `OCCLUDE_PART`, `PART_SHIFT`); every other slot parked."""
+    """Occluder poses of a random drop: with probability `env.occluded_share`, one occluder
+    before a drawn camera, slot 0 (whole) or, with a second slot, as often slot 1 (part), its
+    pose drawn from `occluders.TRAINING`, apart from every test case's; every other slot parked."""
     pos, quat = self.parked_occluders()
     share = self.config.env.occluded_share
     if share == 0:
       return pos, quat
-    k_on, k_camera, k_part, k_shift = jax.random.split(key, 4)
-    cameras = jnp.asarray([c.pos for c in self.config.scene.cameras], jnp.float32)
-    camera = cameras[jax.random.randint(k_camera, (), 0, len(cameras))]
-    part = (jax.random.bernoulli(k_part) if len(self.config.scene.occluders) > 1
-            else jnp.bool_(False))
-    k_side, k_shift = jax.random.split(k_shift)
-    shift = jax.random.uniform(k_shift, (), minval=-PART_SHIFT, maxval=PART_SHIFT)
-    along, side, height = (jnp.where(part, p, w) for p, w in zip(OCCLUDE_PART, OCCLUDE_WHOLE))
-    side = jnp.where(part, jnp.where(jax.random.bernoulli(k_side), side, -side) + shift, 0.0)
-    azimuth = jnp.arctan2(camera[1], camera[0])
-    c, s = jnp.cos(azimuth), jnp.sin(azimuth)
-    along = along * jnp.hypot(camera[0], camera[1])
-    at = jnp.stack([c * along - s * side, s * along + c * side, height])
+    k_on, k_pose = jax.random.split(key)
+    cameras_xy = jnp.asarray([c.pos[:2] for c in self.config.scene.cameras], jnp.float32)
+    _, part, (x, y, z, yaw) = occluders.drawn(occluders.TRAINING, k_pose, cameras_xy,
+                                              len(self.config.scene.occluders) > 1)
     slot = part.astype(jnp.int32)
     on = jax.random.uniform(k_on) < share
-    pos = pos.at[slot].set(jnp.where(on, at, pos[slot]))
-    quat = quat.at[slot].set(jnp.where(on, yaw_quat(azimuth), quat[slot]))
+    pos = pos.at[slot].set(jnp.where(on, jnp.stack([x, y, z]), pos[slot]))
+    quat = quat.at[slot].set(jnp.where(on, yaw_quat(yaw), quat[slot]))
     return pos, quat
 
   def parked_occluders(self):

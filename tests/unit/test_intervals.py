@@ -2,24 +2,33 @@
 report's table of them."""
 import json
 import math
+import pathlib
+import sys
 
 import numpy as np
 import pytest
 
 from mvcoba_jax.evaluation import intervals, report
 
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / 'experiments'))
+import interval_coverage  # noqa: E402
 
-def test_two_seeds_that_disagree_in_every_case():
-  """Seeds score 0 and 1 in each of 3 cases: a resample's mean is k/6 with k ~ Binomial(6, 1/2);
-  its 2.5th and 97.5th percentiles are 1/6 and 5/6 exactly."""
-  point, low, high = intervals.interval(np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]))
-  assert (point, low, high) == pytest.approx((0.5, 1 / 6, 5 / 6))
+
+def test_interval_is_student_t_over_the_per_seed_means():
+  """Seeds whose means over the cases are 0.4, 0.6 and 0.8: the mean 0.6, sd 0.2, and the
+  interval 0.6 +- t(0.975, 2) * 0.2 / sqrt(3) with t = 4.3027; the cases' spread within a seed
+  does not narrow it."""
+  scores = np.array([[0.3, 0.5], [0.6, 0.6], [0.9, 0.7]])
+  half = 4.302653 * 0.2 / math.sqrt(3)
+  assert intervals.interval(scores) == pytest.approx((0.6, 0.6 - half, 0.6 + half), abs=1e-6)
+  assert intervals.seed_means(scores) == pytest.approx([0.4, 0.6, 0.8])
 
 
 def test_interval_of_many_normal_seeds_matches_the_normal_theory():
   scores = np.random.default_rng(0).normal(0.6, 0.1, size=(60, 5))
   point, low, high = intervals.interval(scores)
-  half = 1.96 * 0.1 / math.sqrt(scores.size)
+  half = 1.96 * 0.1 / math.sqrt(scores.size)  # independent cases: seed means of sd 0.1/sqrt(5)
   assert low < 0.6 < high and (high - low) / 2 == pytest.approx(half, rel=0.2)
 
 
@@ -31,10 +40,21 @@ def test_degenerate_and_single_seed_scores():
     intervals.interval(np.array([[0.5, np.nan]]))
 
 
-def test_separated_only_when_disjoint():
-  assert intervals.separated((0.8, 0.75, 0.85), (0.5, 0.4, 0.6))
-  assert not intervals.separated((0.8, 0.55, 0.85), (0.5, 0.4, 0.6))
-  assert not intervals.separated((0.8, math.nan, math.nan), (0.5, 0.4, 0.6))
+def test_interval_covers_the_truth_when_a_seed_effect_is_shared_by_its_cases():
+  """1000 simulated experiments of 5 seeds x 12 cases (seed effect sd 8 shared by a seed's
+  cases, case effect sd 10, noise sd 3): the nominal 95% interval covers the suite's true mean
+  in at least 90% of them. The stratified bootstrap over seeds within each case, which the
+  tables used before, covers it in under half: the test tells the two apart."""
+  found = interval_coverage.coverages(count=1000, seeds=5, cases=12, resamples=500)
+  assert found['t_over_seed_means'] >= 0.90, found
+  assert found['stratified_bootstrap'] < 0.60, found
+
+
+def test_separated_only_when_disjoint_with_enough_seeds():
+  assert intervals.separated((0.8, 0.75, 0.85), (0.5, 0.4, 0.6), (5, 5))
+  assert not intervals.separated((0.8, 0.75, 0.85), (0.5, 0.4, 0.6), (5, 3))
+  assert not intervals.separated((0.8, 0.55, 0.85), (0.5, 0.4, 0.6), (5, 5))
+  assert not intervals.separated((0.8, math.nan, math.nan), (0.5, 0.4, 0.6), (5, 5))
 
 
 def test_report_gives_intervals_for_methods_evaluated_from_several_seeds():
@@ -90,10 +110,13 @@ def test_separations_name_only_the_pairs_whose_intervals_are_disjoint():
   from mvcoba_jax.evaluation import paper
   ours = {'mvcoba': {'grasp_success': (80.0, 75.0, 85.0), 'completion': (50.0, 20.0, 80.0)},
           'vpg': {'grasp_success': (60.0, 55.0, 65.0), 'completion': (40.0, 10.0, 70.0)},
-          'grasp_only': {'grasp_success': (70.0, 62.0, 78.0), 'completion': None}}
-  text = paper.separations(ours)
+          'grasp_only': {'grasp_success': (70.0, 62.0, 78.0), 'completion': None},
+          'cpg': {'grasp_success': (30.0, 29.0, 31.0), 'completion': None}}
+  seeds = {'mvcoba': 5, 'vpg': 6, 'grasp_only': 5, 'cpg': 4}
+  text = paper.separations({m: e | {'seeds': seeds[m]} for m, e in ours.items()})
   assert '- grasp success: MV-COBA > VPG\n' in text  # DRGP's interval overlaps both
   assert '- completion: no two methods distinguishable' in text
+  assert 'no claim about: CPG' in text and 'CPG' not in text.split('\n', 1)[1]
 
 
 def test_folders_of_one_name_get_labels_of_their_own(tmp_path):
@@ -129,7 +152,9 @@ def test_intervals_pool_only_seeds_of_one_training_config():
   from mvcoba_jax.evaluation import paper
   text = paper.comparisons({'ordered': rows})
   assert '| MV-COBA (mvcoba {train.gamma=0.2}) | 2 | 91.5 [' in text and '| 86.3 |' in text
-  assert 'MV-COBA {train.gamma=0.2} > MV-COBA' in text
+  assert '| 90.5 / 92.5 |' in text  # each seed's grasp success
+  assert 'fewer than 5 seeds, so no claim about: MV-COBA, ' in text
+  assert '- grasp success: no two methods distinguishable' in text
 
 
 def test_rows_of_one_training_evaluated_by_two_versions_pool():
