@@ -1,12 +1,14 @@
-"""How far the native and the MJX backends agree on the same primitives from the same states.
+"""How far the native backend and another (MJX's JAX implementation or MuJoCo Warp) agree on the
+same primitives and pictures from the same states.
 
 Settles `--batch` random drops of the default preset once (native), then runs the same actions
 on both backends from those states: a grasp at a random object in play, or a push 5 cm behind
 one along a random direction (half of each). Prints one JSON object: the share of grasps whose
 success agrees, each backend's grasp success, how far each object in play ended apart (median,
-p90, max), and the health flags.
+p90, max), the health flags, and the share of heightmap cells of the settled states that agree
+within 2 mm.
 
-  python benchmarks/backend_agreement.py [--batch 32] [--seed 0]
+  python benchmarks/backend_agreement.py [--other mjx|warp] [--batch 32] [--seed 0]
 """
 from __future__ import annotations
 
@@ -20,6 +22,7 @@ import numpy as np  # noqa: E402
 from physics import settings  # noqa: E402
 
 from mvcoba_jax.config import resolve  # noqa: E402
+from mvcoba_jax.learner import task  # noqa: E402
 from mvcoba_jax.sim import primitives  # noqa: E402
 from mvcoba_jax.sim.geometry import rotation_angle  # noqa: E402
 from mvcoba_jax.sim.primitives import Action  # noqa: E402
@@ -50,40 +53,49 @@ def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--batch', type=int, default=32)
   parser.add_argument('--seed', type=int, default=0)
+  parser.add_argument('--other', choices=('mjx', 'warp'), default='mjx')
   args = parser.parse_args()
   config = resolve(None)
-  native, mjx = on(config, 'native'), on(config, 'mjx')
+  native, other = on(config, 'native'), on(config, args.other)
   k_reset, k_act = jax.random.split(jax.random.PRNGKey(args.seed))
   states = jax.jit(jax.vmap(native.reset))(jax.random.split(k_reset, args.batch))
   actions = random_actions(native, states, k_act)
   out = {}
-  for name, env in (('native', native), ('mjx', mjx)):
+  maps = {}
+  for name, env in (('native', native), (args.other, other)):
+    maps[name] = jax.jit(lambda s, env=env: task.observe(env, s))(states)
+  for name, env in (('native', native), (args.other, other)):
     end, info = jax.jit(jax.vmap(env.step))(states, actions)
     out[name] = (jax.device_get(end), jax.device_get(info),
                  np.asarray(jax.vmap(env.object_positions)(end)))
-  (_, info_n, pos_n), (_, info_m, pos_m) = out['native'], out['mjx']
+  (_, info_n, pos_n), (_, info_m, pos_m) = out['native'], out[args.other]
+  cells = ((np.asarray(maps['native'].seen) == np.asarray(maps[args.other].seen))
+           & (np.abs(np.asarray(maps['native'].depth) - np.asarray(maps[args.other].depth))
+              <= 0.002))
   grasp = np.asarray(actions.primitive) == primitives.GRASP
   in_play = np.asarray(states.in_play)
-  both_kept = in_play & np.asarray(out['native'][0].in_play) & np.asarray(out['mjx'][0].in_play)
+  both_kept = in_play & np.asarray(out['native'][0].in_play) & np.asarray(out[args.other][0].in_play)
   gap = np.linalg.norm(pos_n - pos_m, axis=-1)[both_kept]
   success_n, success_m = np.asarray(info_n.grasp_success), np.asarray(info_m.grasp_success)
   print(json.dumps({
       'benchmark': 'backend_agreement',
-      'settings': {**settings(), 'batch': args.batch, 'seed': args.seed,
+      'settings': {**settings(), 'batch': args.batch, 'seed': args.seed, 'other': args.other,
                    'actions': 'half grasps at a random object in play, half pushes 5 cm behind '
                               'one along a random rotation; start states settled natively'},
       'results': {
           'grasps': int(grasp.sum()),
           'grasp_success_native': float(success_n[grasp].mean()),
-          'grasp_success_mjx': float(success_m[grasp].mean()),
+          f'grasp_success_{args.other}': float(success_m[grasp].mean()),
           'grasp_outcomes_agree': float((success_n == success_m)[grasp].mean()),
           'objects_compared': int(gap.size),
           'object_gap_m': {'median': float(np.median(gap)), 'p90': float(np.quantile(gap, 0.9)),
                            'max': float(gap.max())},
           'objects_lost_native': int(np.asarray(info_n.lost).sum()),
-          'objects_lost_mjx': int(np.asarray(info_m.lost).sum()),
+          f'objects_lost_{args.other}': int(np.asarray(info_m.lost).sum()),
           'healthy_native': float(np.asarray(info_n.healthy).mean()),
-          'healthy_mjx': float(np.asarray(info_m.healthy).mean()),
+          f'healthy_{args.other}': float(np.asarray(info_m.healthy).mean()),
+          'heightmap_cells_within_2mm': float(cells.mean()),
+          'heightmap_cells_within_2mm_worst_view': float(cells.mean(axis=(2, 3)).min()),
       },
   }, indent=1))
 

@@ -1,13 +1,14 @@
-"""Physics throughput of the two backends on the same scene, and of raw MuJoCo for reference.
+"""Physics throughput of the backends on the same scene, and of raw MuJoCo for reference.
 
 Prints one JSON object: for each object count and batch size, env-steps/s and primitives/s of
 `jit(vmap(env.step))` (a grasp at an object, the full scripted primitive) on the native backend,
-the same on MJX (at the `--mjx-batch` sizes only: its programs take minutes to compile), and the
-same start states and control sequences stepped by raw `mujoco.rollout` and
-`mujoco.batch.Batch.rollout` outside JAX (what the native backend's JAX bridge costs), with the
-ratios measured in the same run.
+the same on MJX's JAX implementation (at the `--mjx-batch` sizes only: its programs take minutes
+to compile) and on MuJoCo Warp (at the `--warp-batch` sizes), and the same start states and
+control sequences stepped by raw `mujoco.rollout` and `mujoco.batch.Batch.rollout` outside JAX
+(what the native backend's JAX bridge costs), with the ratios measured in the same run.
 
-  python benchmarks/physics.py [--batch 1 8 32] [--mjx-batch 8] [--objects 10 30] [--repeats 3]
+  python benchmarks/physics.py [--batch 1 8 32] [--mjx-batch 8] [--warp-batch 8]
+                               [--objects 10 30] [--repeats 3]
 """
 from __future__ import annotations
 
@@ -126,7 +127,7 @@ def raw_rows(env: Tabletop, states, actions: Action, repeats: int) -> dict:
   return out
 
 
-def bench(n: int, batch: int, mjx: bool, repeats: int) -> dict:
+def bench(n: int, batch: int, mjx: bool, warp: bool, repeats: int) -> dict:
   native_env = make_env(n, 'native')
   keys = jax.random.split(jax.random.PRNGKey(0), batch)
   states = jax.jit(jax.vmap(native_env.reset))(keys)
@@ -140,6 +141,9 @@ def bench(n: int, batch: int, mjx: bool, repeats: int) -> dict:
   if mjx:  # the same settled states, stepped by MJX
     row['mjx'] = backend_row(make_env(n, 'mjx'), states, actions, repeats)
     row['native_over_mjx'] = nat / row['mjx']['env_steps_per_s']
+  if warp:  # the same settled states, stepped by MuJoCo Warp
+    row['warp'] = backend_row(make_env(n, 'warp'), states, actions, repeats)
+    row['warp_over_native'] = row['warp']['env_steps_per_s'] / nat
   return row
 
 
@@ -161,6 +165,8 @@ def main():
   parser.add_argument('--batch', type=int, nargs='+', default=[1, 8, 32])
   parser.add_argument('--mjx-batch', type=int, nargs='*', default=[8],
                       help='batch sizes at which MJX is measured too (none: native only)')
+  parser.add_argument('--warp-batch', type=int, nargs='*', default=[],
+                      help='batch sizes at which MuJoCo Warp is measured too')
   parser.add_argument('--objects', type=int, nargs='+', default=[10, 30], choices=sorted(POOLS))
   parser.add_argument('--repeats', type=int, default=3)
   parser.add_argument('--cache', action='store_true',
@@ -171,7 +177,7 @@ def main():
   rows = []
   for n in args.objects:
     for b in args.batch:
-      rows.append(bench(n, b, b in args.mjx_batch, args.repeats))
+      rows.append(bench(n, b, b in args.mjx_batch, b in args.warp_batch, args.repeats))
       print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
   print(json.dumps({
       'benchmark': 'physics',

@@ -9,7 +9,7 @@ from mvcoba_jax.sim.primitives import Action
 from mvcoba_jax.sim.scene import park_position
 from mvcoba_jax.sim.tabletop import Layout, Tabletop
 
-BACKENDS = ('native', 'mjx')  # physics tests run on both; the rest on the default (auto)
+BACKENDS = ('native', 'mjx', 'warp')  # physics tests run on each; the rest on the default (auto)
 
 
 def make_env(preset: str, backend: str = 'auto', *overrides: str) -> Tabletop:

@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import importlib.util
 import math
 import typing
 from typing import Protocol
 
 from mvcoba_jax.sim.shapes import SHAPE_NAMES
 
-BACKENDS = ('auto', 'native', 'mjx')
+BACKENDS = ('auto', 'native', 'mjx', 'warp')
 DROPS = ('spread', 'heap')  # env.drop
 
 
@@ -118,8 +119,10 @@ class CameraConfig:
 @dataclasses.dataclass(frozen=True)
 class SceneConfig:
   """What goes into the compiled MuJoCo model, and which engine steps it."""
-  # 'native': MuJoCo's C engine and mj_ray on CPU threads; 'mjx': MJX, traced into the jitted
-  # program (the path for GPUs and TPUs); 'auto': native when JAX's default device is a CPU.
+  # 'native': MuJoCo's C engine and mj_ray on CPU threads; 'mjx': MJX's JAX implementation,
+  # traced into the jitted program; 'warp': MuJoCo Warp and its batch renderer, in the jitted
+  # program (NVIDIA GPUs; needs the gpu extra); 'auto': the fastest measured on this kind of
+  # device (`physics.resolve_backend`).
   backend: str = 'auto'
   native_threads: int = 0  # threads of the native backend; 0: every core this process may use
   # Object slots: (shape name, count). Objects not in play are parked away from the table.
@@ -172,6 +175,9 @@ class SceneConfig:
                         f'{", ".join(SHAPE_NAMES)} with at least one slot in all')
     if not self.cameras:
       raise ConfigError('scene.cameras: at least one camera')
+    if self.backend == 'warp' and importlib.util.find_spec('warp') is None:
+      raise ConfigError("scene.backend=warp needs NVIDIA Warp: pip install -e '.[gpu]' "
+                        "(or 'mujoco-mjx[warp]')")
     if self.contact_timeconst < 2 * self.timestep:
       raise ConfigError(f'scene.contact_timeconst={self.contact_timeconst!r} is below 2 x '
                         f'scene.timestep ({2 * self.timestep:g}), which MuJoCo would use instead')

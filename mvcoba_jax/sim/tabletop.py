@@ -67,9 +67,13 @@ def where_envs(mask, new, old):
 def make_backend(scene: Scene):
   """The backend `scene.config.backend` names, for this compiled scene. Each is imported when
   chosen: a process on the native backend never imports MJX, and one on MJX starts no C threads."""
-  if physics.resolve_backend(scene.config) == 'native':
+  backend = physics.resolve_backend(scene.config)
+  if backend == 'native':
     from mvcoba_jax.sim.native import NativePhysics  # noqa: PLC0415
     return NativePhysics(scene)
+  if backend == 'warp':
+    from mvcoba_jax.sim.warp_physics import WarpPhysics  # noqa: PLC0415
+    return WarpPhysics(scene)
   from mvcoba_jax.sim.mjx_physics import MjxPhysics  # noqa: PLC0415
   return MjxPhysics(scene)
 

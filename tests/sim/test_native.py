@@ -19,8 +19,8 @@ def test_auto_is_native_on_a_cpu_and_a_bad_name_is_refused():
   config = resolve('tiny')
   assert config.scene.backend == 'auto'
   assert physics.resolve_backend(config.scene) == 'native'  # the tests run on a CPU
-  with pytest.raises(ConfigError, match=r"scene.backend='warp': allowed values are auto, native"):
-    physics.resolve_backend(override(config, 'scene.backend=warp').scene)
+  with pytest.raises(ConfigError, match=r"scene.backend='jax': allowed values are auto, native"):
+    physics.resolve_backend(override(config, 'scene.backend=jax').scene)
 
 
 def run(threads: int):

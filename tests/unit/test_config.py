@@ -39,7 +39,7 @@ def test_presets_are_valid(preset):
     ('seed=18446744073709551616', 'seed=18446744073709551616: allowed range'),
     ('num_envs=١', "num_envs='١': expected an integer"),
     ('env.num_objects=99', 'env.num_objects=99 exceeds the 12 object slots of scene.pool'),
-    ('scene.backend=warp', "scene.backend='warp': allowed values are auto, native, mjx"),
+    ('scene.backend=jax', "scene.backend='jax': allowed values are auto, native, mjx, warp"),
     ('scene.pool=cube', 'expected shape:count'),
     ('scene.pool=cube:1,cube:2', 'expected distinct shapes'),
     ('scene.pool=lego:2', 'expected distinct shapes'),
