@@ -1,7 +1,8 @@
 """Training-step throughput and where its time goes: physics, rendering, the learner's parts.
 
 Prints one JSON object: for each batch size B, bootstrap target (`train.target`: `--targets`) and
-physics backend (native at every B, MJX at the `--mjx-batch` sizes), the compile time and the
+physics backend (native at every B, MJX at the `--mjx-batch` sizes, MuJoCo Warp at the
+`--warp-batch` sizes), the compile time and the
 steady-state wall time of the jitted training iteration (actions/s, updates/s), and the time of
 its parts measured alone on the same states: the batched primitive (physics), render + heightmaps
 (rendering), the 16-rotation acting forward, the target network's forward on a sampled batch of
@@ -10,7 +11,7 @@ measures a second configuration, the first with more overrides, in the same run,
 of its figures over the first's.
 
   python benchmarks/train.py [--config default] [--set KEY=VALUE] [--batch 1 8 32]
-      [--targets network acting] [--mjx-batch 8] [--versus KEY=VALUE ...]
+      [--targets network acting] [--mjx-batch 8] [--warp-batch 64] [--versus KEY=VALUE ...]
 """
 from __future__ import annotations
 
@@ -62,7 +63,8 @@ def bench(config, batch: int, target: str, backend: str, repeats: int) -> dict:
   return {
       'batch': batch, 'target': target, 'backend': backend, 'init_first_call_s': init_first,
       'iteration_compile_s': it_first - it_wall, 'iteration_wall_s': it_wall,
-      'actions_per_s': batch * k / it_wall, 'updates_per_s': k / it_wall,
+      'actions_per_s': batch * k / it_wall,
+      'updates_per_s': k * config.updates_per_step / it_wall,
       'per_action_step_s': parts,
   }
 
@@ -73,6 +75,8 @@ def main():
   parser.add_argument('--batch', type=int, nargs='+', default=[1, 8, 32])
   parser.add_argument('--mjx-batch', type=int, nargs='*', default=[8],
                       help='batch sizes at which the MJX backend is measured too')
+  parser.add_argument('--warp-batch', type=int, nargs='*', default=[],
+                      help='batch sizes at which the Warp backend is measured too')
   parser.add_argument('--targets', nargs='+', default=['network', 'acting'],
                       choices=config_lib.TARGETS, help='train.target values to measure')
   parser.add_argument('--repeats', type=int, default=2)
@@ -92,7 +96,8 @@ def main():
   rows = []
   for b in args.batch:
     for target in args.targets:
-      for backend in ('native', 'mjx') if b in args.mjx_batch else ('native',):
+      backends = ['native'] + ['mjx'] * (b in args.mjx_batch) + ['warp'] * (b in args.warp_batch)
+      for backend in backends:
         for name, variant in variants:
           rows.append({'variant': name, **bench(variant, b, target, backend, args.repeats)})
           print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
@@ -103,9 +108,10 @@ def main():
     r['share_of_parts'] = {k: v / total for k, v in parts.items()}
     twin = lambda **kv: [o for o in rows if o['batch'] == r['batch'] and all(
         o[k] == v for k, v in {'variant': r['variant'], **kv}.items())]
-    same = twin(backend='mjx', target=r['target'])
-    if r['backend'] == 'native' and same:
-      r['actions_per_s_over_mjx'] = r['actions_per_s'] / same[0]['actions_per_s']
+    for other in ('mjx', 'warp'):
+      same = twin(backend=other, target=r['target'])
+      if r['backend'] == 'native' and same:
+        r[f'actions_per_s_over_{other}'] = r['actions_per_s'] / same[0]['actions_per_s']
     network = twin(backend=r['backend'], target='network')
     if r['target'] != 'network' and network:
       r['actions_per_s_over_network_target'] = r['actions_per_s'] / network[0]['actions_per_s']
@@ -119,6 +125,7 @@ def main():
                     'settings': {'method': config.network.method,
                                  'steps_per_iteration': config.train.steps_per_iteration,
                                  'batch_size': config.train.batch_size,
+                                 'replay_ratio': config.train.replay_ratio,
                                  'grid': round(2 * config.scene.workspace_half
                                                / config.perception.heightmap_resolution),
                                  'jax': jax.__version__, 'device': str(jax.devices()[0]),

@@ -98,7 +98,11 @@ class TrainConfig:
   epsilon_decay_actions: int = 800  # linear decay over this many actions (~25 min on 2 CPU cores)
   explore_min_height: float = 0.01  # random actions go to heightmap cells above this (m)
   replay_capacity: int = 1024  # transitions kept on the device
-  batch_size: int = 8  # transitions per SGD update, one update per lockstep action
+  batch_size: int = 8  # transitions per SGD update
+  # Replayed transitions sampled per new transition. 0: one update per lockstep action, so the
+  # ratio is batch_size / num_envs and falls as the batch of tabletops grows; > 0: as many
+  # updates per lockstep action as keep it (`updates_per_step`), the same at any num_envs.
+  replay_ratio: float = 0.0
   priority_exponent: float = 0.6  # sampling weight |TD error|^alpha (0: uniform)
   target_update_period: int = 50  # SGD updates between target-network copies
   # Where max Q(s') of the bootstrap target comes from: 'acting', the online network's acting
@@ -134,7 +138,8 @@ class TrainConfig:
         'huber_delta': Between(0, 100, low_open=True), 'epsilon_start': Between(0, 1),
         'epsilon_end': Between(0, 1), 'epsilon_decay_actions': Between(1, 10 ** 9),
         'explore_min_height': Between(0, 0.4), 'replay_capacity': Between(1, 10 ** 7),
-        'batch_size': Between(1, 4096), 'priority_exponent': Between(0, 10),
+        'batch_size': Between(1, 4096), 'replay_ratio': Between(0, 64),
+        'priority_exponent': Between(0, 10),
         'target_update_period': Between(1, 10 ** 9), 'target': TARGETS,
         'checkpoint_every': Between(1, 10 ** 9), 'failed_grasp_reward': Between(-1, 1),
         'no_change_push_reward': Between(-1, 1), 'future_max': FUTURE_MAX,
@@ -153,6 +158,13 @@ class Config:
 
   def __post_init__(self):
     check(self, '', {'num_envs': Between(1, 65536), 'seed': Between(0, 2 ** 31 - 1)})
+
+  @property
+  def updates_per_step(self) -> int:
+    """SGD updates after each lockstep action: 1, or with `train.replay_ratio` as many batches
+    as sample that many replayed transitions per new one (at least 1)."""
+    ratio = self.train.replay_ratio
+    return 1 if ratio == 0 else max(1, round(ratio * self.num_envs / self.train.batch_size))
 
 
 REPLAY_LIMIT_BYTES = 16 * 2 ** 30  # a replay above this is refused: no CPU here holds it twice
@@ -239,7 +251,7 @@ def validate(config: Config) -> Config:
   return config
 
 
-PRESETS = ('default', 'paper', 'paper_text', 'authors', 'tiny')  # modules of mvcoba_jax.presets
+PRESETS = ('default', 'paper', 'paper_text', 'authors', 'gpu', 'tiny')  # modules of mvcoba_jax.presets
 
 
 def load_preset(preset: str | pathlib.Path) -> Config:
@@ -408,7 +420,7 @@ RETIRED = {TrainConfig: ('max_consecutive_failures',)}
 LEGACY = {TrainConfig: {'target': 'network', 'failed_grasp_reward': 0.5,
                         'no_change_push_reward': 0.0, 'bootstrap_no_change': True,
                         'future_max': 'rule', 'grasp_symmetry': False, 'fresh_in_batch': False,
-                        'quarter_turns': False},
+                        'quarter_turns': False, 'replay_ratio': 0.0},
           EnvConfig: {'drop': 'spread', 'heap_half': 0.125, 'occluded_share': 0.0,
                       'packed_share': 0.0},
           NetworkConfig: {'pad_to_diagonal': False, 'shared_stages': 0}}

@@ -185,7 +185,8 @@ class Trainer:
 
   # ---------------------------------------------------------------- one lockstep action
   def step(self, state: TrainState, learn, epsilon) -> tuple[TrainState, StepLog]:
-    """Every environment acts once; with `learn`, the transition is stored and one update runs.
+    """Every environment acts once; with `learn`, the transition is stored and
+    `config.updates_per_step` updates run (`train.replay_ratio`).
 
     `epsilon` >= 0 overrides the schedule (0 for greedy evaluation); traced, like `learn`, so one
     compiled program serves training and evaluation.
@@ -231,7 +232,16 @@ class Trainer:
     replay = jax.lax.cond(add, lambda r: replay_lib.add(r, store), lambda r: r, state.replay)
     state = state.replace(replay=replay)
     fresh = (store, add) if t.fresh_in_batch else None
-    state, loss = self.update(state, k_learn, learn & (replay.size > 0), fresh)
+    keys, enabled = jax.random.split(k_learn, self.config.updates_per_step), learn & (replay.size > 0)
+    if len(keys) == 1 or jax.default_backend() == 'cpu':  # written out on a CPU, as `iterate`
+      losses = []
+      for k in keys:
+        state, loss = self.update(state, k, enabled, fresh)
+        losses.append(loss)
+      loss = sum(losses) / len(losses)
+    else:
+      state, losses = jax.lax.scan(lambda s, k: self.update(s, k, enabled, fresh), state, keys)
+      loss = jnp.mean(losses)
 
     b = done.shape[0]
     state = state.replace(

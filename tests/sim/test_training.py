@@ -59,6 +59,23 @@ def test_training_steps_fill_the_replay_and_update(trainer, trained):
   assert np.asarray(state.task.env.healthy).all()
 
 
+def test_warp_training_step_keeps_the_replay_ratio():
+  """The whole training step on the Warp backend (physics, both cameras, the network, replay and
+  updates in one compiled call), with `train.replay_ratio=1` at 4 tabletops and batches of 2:
+  two updates after each lockstep action, so as many transitions are sampled as arrive."""
+  config = resolve(TINY, ['scene.backend=warp', 'num_envs=4', 'train.batch_size=2',
+                          'train.replay_ratio=1'])
+  assert config.updates_per_step == 2
+  trainer = Trainer(config)
+  state = jax.jit(trainer.init)(jax.random.PRNGKey(1))
+  state, log = jax.jit(trainer.iterate)(state, jnp.bool_(True), jnp.float32(-1.0))
+  k = config.train.steps_per_iteration
+  assert int(state.actions) == 4 * k and int(state.replay.size) == 4 * (k - 1)
+  assert int(state.updates) == 2 * (k - 1) and int(state.skipped_updates) == 0
+  assert np.isfinite(np.asarray(log.loss)).all() and np.asarray(state.task.env.healthy).all()
+  assert np.asarray(log.primitive).size == 4 * k
+
+
 def test_checkpoint_names_keep_the_task_fields_where_earlier_runs_saved_them(trained):
   """The task state (`TrainState.task`) is saved under the names its fields had at the top of
   the training state, so a run checkpointed before it existed resumes."""

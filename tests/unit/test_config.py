@@ -180,3 +180,13 @@ def test_preset_files_that_are_not_python_or_whose_get_config_raises_are_one_lin
   (tmp_path / 'raises.py').write_text('def get_config():\n  return 1 / 0\n')
   with pytest.raises(ConfigError, match='get_config.. raised ZeroDivisionError: division by zero'):
     load_preset(tmp_path / 'raises.py')
+
+
+def test_replay_ratio_sets_the_updates_per_lockstep_action():
+  """Sampled replayed transitions per new one stay at the ratio as the batch of tabletops grows."""
+  for envs, updates in ((8, 1), (32, 4), (64, 8), (256, 32)):
+    config = resolve('default', [f'num_envs={envs}', 'train.replay_ratio=1'])
+    assert config.updates_per_step == updates
+    assert updates * config.train.batch_size / envs == 1
+  assert resolve('default', ['num_envs=64']).updates_per_step == 1  # off: one update a step
+  assert resolve('default', ['num_envs=2', 'train.replay_ratio=0.5']).updates_per_step == 1
