@@ -81,8 +81,10 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
   writes the logs.
   """
   workdir = pathlib.Path(workdir)
-  if resume and not holds_checkpoint(workdir):  # before anything is created or compiled
-    raise TrainError(f'resume: {workdir / "checkpoints"} holds no checkpoint')
+  if resume:  # before anything is created or compiled
+    if not holds_checkpoint(workdir):
+      raise TrainError(f'resume: {workdir / "checkpoints"} holds no checkpoint')
+    resumable(config, workdir)
   devices = sharding.mesh()
   try:  # a config that cannot be built fails here, before the work directory exists
     sharding.check_divisible(config.num_envs, devices)
@@ -101,6 +103,33 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
     return _train(config, trainer, devices, workdir, resume, eval_actions, progress, lead)
   finally:
     folders.release(workdir)
+
+
+# What a resumed training may change of the config it was started with: how long it trains, how
+# often it saves and logs, and where it computes. Anything else would make one run of two recipes.
+RESUME_MAY_CHANGE = ('train.total_actions', 'train.checkpoint_every', 'train.curve_window',
+                     *config_lib.RUNTIME_FIELDS)
+
+
+def resumable(config: Config, workdir: pathlib.Path) -> None:
+  """Raises TrainError when `config` differs from the run's saved config.json in a field outside
+  `RESUME_MAY_CHANGE` (naming each), or asks for fewer actions than its checkpoint holds."""
+  path = workdir / 'config.json'
+  try:
+    saved = config_lib.from_dict(json.loads(path.read_text()), where=str(path))
+  except (OSError, ValueError, config_lib.ConfigError) as e:
+    raise TrainError(f'resume: {path}: cannot read the run\'s config ({str(e)[:200]})') from None
+  before, now = (config_lib.flat(config_lib.to_dict(c)) for c in (saved, config))
+  changed = [f'{k}={before.get(k)!r} -> {now.get(k)!r}' for k in dict.fromkeys([*before, *now])
+             if before.get(k) != now.get(k) and k not in RESUME_MAY_CHANGE]
+  if changed:
+    raise TrainError(f'resume: the config differs from {path} in {", ".join(changed)}; only '
+                     f'{", ".join(RESUME_MAY_CHANGE)} may change on resume (train a new run '
+                     'for another recipe)')
+  done, per_call = latest_step(workdir), config.num_envs * config.train.steps_per_iteration
+  if -(-config.train.total_actions // per_call) * per_call < done:  # whole calls, as trained
+    raise TrainError(f'resume: train.total_actions={config.train.total_actions} is below the '
+                     f'{done} actions its latest checkpoint holds')
 
 
 def _train(config: Config, trainer: Trainer, devices, workdir: pathlib.Path, resume: bool,
@@ -393,7 +422,7 @@ def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, ru
         for suite, cases in cases_of.items()
         for label, source, path, training in zip(labels, sources, checkpoints + [None],
                                                  trained)}
-    report = report_lib.kept_rows(pathlib.Path(out), settings) if resume else {}
+    report, others = report_lib.kept_rows(pathlib.Path(out), settings) if resume else ({}, [])
   except (config_lib.ConfigError, ScenarioError, PolicyError, report_lib.ResultsError,
           folders.FolderError) as e:
     raise EvaluationError(str(e)) from None
@@ -416,6 +445,9 @@ def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, ru
     out = folders.claim(out, RESULT_FILES, keep=resume, overwrite=overwrite)
   except folders.FolderError as e:
     raise EvaluationError(str(e)) from None
+  if others:
+    say(f'kept {len(others)} rows of {out / "results.json"} that this evaluation does not '
+        f'redo: {", ".join(f"{suite}/{label}" for suite, label in others)}')
   try:
     return _evaluate(cases_of, labels, sources, settings, report, base, protocol, runs,
                      max_actions, seed, out, save_visuals, video, progress)

@@ -389,6 +389,13 @@ def evaluated(config: Config, overrides: typing.Sequence[str]) -> Config:
   return validate(config)
 
 
+def flat(tree: dict, prefix: str = '') -> dict:
+  """{dotted name: leaf} of a nested dict (a config as `to_dict` gives it)."""
+  if not isinstance(tree, dict):
+    return {prefix[:-1]: tree}
+  return {k: v for name, sub in tree.items() for k, v in flat(sub, f'{prefix}{name}.').items()}
+
+
 def to_dict(config) -> dict:
   return dataclasses.asdict(config)
 

@@ -14,8 +14,10 @@ directory (config.json, checkpoints/) and writes the following to DIR; `policy.l
 from __future__ import annotations
 
 import dataclasses
+import io
 import json
 import logging
+import os
 import pathlib
 
 import jax
@@ -23,7 +25,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
-from mvcoba_jax import methods, perception
+from mvcoba_jax import folders, methods, perception
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Config
 from mvcoba_jax.learner import agent, networks
@@ -172,20 +174,47 @@ def figures(results, model: networks.QNetwork) -> dict:
   return found
 
 
-def export(workdir, out, results=(), commit: str | None = None) -> dict[str, pathlib.Path]:
+EXPORT_FILES = ('params.npz', 'model.json', 'model.onnx')
+
+
+def export(workdir, out, results=(), commit: str | None = None,
+           overwrite: bool = False) -> dict[str, pathlib.Path]:
   """Writes params.npz, model.json and model.onnx of the latest checkpoint of `workdir` to `out`;
   model.json carries the figures of the `results` files' rows for these parameters (`figures`)
-  and `commit`, the code that trained it, when given."""
+  and `commit`, the code that trained it, when given. An `out` holding an export is refused
+  unless `overwrite`; the folder is held (`folders.claim`) while it is written, each file
+  replaced whole.
+
+  Raises PolicyError for a checkpoint or results that cannot serve, or an `out` that cannot be
+  written, before anything is written.
+  """
+  try:
+    folders.check(out, EXPORT_FILES, overwrite=overwrite, keep_flag=None)
+  except folders.FolderError as e:
+    raise PolicyError(str(e)) from None
   config, model, step = load(workdir)
   measured = figures(results, model)
   flat = flat_params(model)
   proto = onnx_model(config, model)
-  out = pathlib.Path(out)
-  out.mkdir(parents=True, exist_ok=True)
-  paths = {'params': out / 'params.npz', 'model_json': out / 'model.json',
-           'onnx': out / 'model.onnx'}
-  np.savez(paths['params'], **flat)
-  paths['model_json'].write_text(json.dumps(
-      describe(config, flat, step, workdir, commit, measured), indent=1))
-  paths['onnx'].write_bytes(proto.SerializeToString())
+  try:
+    out = folders.claim(out, EXPORT_FILES, overwrite=overwrite, keep_flag=None)
+  except folders.FolderError as e:
+    raise PolicyError(str(e)) from None
+  try:
+    paths = {'params': out / 'params.npz', 'model_json': out / 'model.json',
+             'onnx': out / 'model.onnx'}
+    buffer = io.BytesIO()
+    np.savez(buffer, **flat)
+    contents = {'params': buffer.getvalue(),
+                'model_json': json.dumps(describe(config, flat, step, workdir, commit, measured),
+                                         indent=1).encode(),
+                'onnx': proto.SerializeToString()}
+    for name, path in paths.items():
+      partial = path.with_name(f'.{path.name}.partial')
+      partial.write_bytes(contents[name])
+      os.replace(partial, path)
+  except OSError as e:
+    raise PolicyError(f'{out}: cannot write the export ({e.strerror})') from None
+  finally:
+    folders.release(out)
   return paths

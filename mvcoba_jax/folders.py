@@ -21,7 +21,7 @@ class FolderError(RuntimeError):
 
 
 def check(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: bool = False,
-          keep_flag: str = '--resume') -> pathlib.Path:
+          keep_flag: str | None = '--resume') -> pathlib.Path:
   """What `claim` would refuse, found without creating or changing anything: a file in the
   folder's place, a folder that another process holds, or one that holds any of `earlier` (the
   files an earlier invocation leaves) when neither `keep` nor `overwrite` says what to do."""
@@ -34,14 +34,14 @@ def check(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: 
     _lock(path).close()  # closing the file releases the lock
   found = [name for name in earlier if (path / name).exists()]
   if found and not keep and not overwrite:
+    keeping = f'{keep_flag} to keep them, ' if keep_flag else ''
     raise FolderError(f'{path} holds results of an earlier run ({", ".join(found)}); pass '
-                      f'{keep_flag} to keep them, --overwrite to replace them, or choose '
-                      'another folder')
+                      f'{keeping}--overwrite to replace them, or choose another folder')
   return path
 
 
 def claim(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: bool = False,
-          keep_flag: str = '--resume') -> pathlib.Path:
+          keep_flag: str | None = '--resume') -> pathlib.Path:
   """`folder`, created and locked for this process, after `check`; with `overwrite` (and not
   `keep`) the `earlier` files it holds are deleted first."""
   path = check(folder, earlier, keep, overwrite, keep_flag)

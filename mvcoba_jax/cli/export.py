@@ -1,6 +1,7 @@
 """Exports the latest checkpoint of a training run: params.npz, model.json and model.onnx.
 
   mvcoba-export --checkpoint WORKDIR --out DIR [--results RESULTS_JSON ...] [--commit SHA]
+                [--overwrite]
 """
 from __future__ import annotations
 
@@ -20,14 +21,13 @@ def main(argv=None) -> int:
                       help='results.json of evaluations of this policy (mvcoba-eval, '
                            'mvcoba-reproduce): their figures for it go into model.json')
   parser.add_argument('--commit', help='the commit of the code that trained it, for model.json')
+  parser.add_argument('--overwrite', action='store_true',
+                      help='replace an export already in --out')
   args = parser.parse_args(argv)
   try:
-    paths = export(args.checkpoint, args.out, args.results, args.commit)
+    paths = export(args.checkpoint, args.out, args.results, args.commit, args.overwrite)
   except PolicyError as e:
     return fail(e)
-  except OSError as e:  # the output folder cannot be written
-    print(f'error: {e.filename}: {e.strerror}', file=sys.stderr)
-    return 2
   for path in paths.values():
     print(path)
   return 0

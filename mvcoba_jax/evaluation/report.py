@@ -96,10 +96,9 @@ def method_of(label: str) -> str:
   return label.split(' ')[0]
 
 
-def _flat(tree, prefix=''):
-  if not isinstance(tree, dict):
-    return {prefix[:-1]: json.dumps(tree)}
-  return {k: v for name, sub in tree.items() for k, v in _flat(sub, f'{prefix}{name}.').items()}
+def _flat(tree) -> dict:
+  """{dotted name: the leaf as JSON} of a config dict."""
+  return {k: json.dumps(v) for k, v in config_lib.flat(tree).items()}
 
 
 def as_trained(training: dict) -> dict:
@@ -244,32 +243,43 @@ def write_whole(path: pathlib.Path, content: str) -> None:
                        ) from None
 
 
-def kept_rows(out: pathlib.Path, settings: dict[tuple[str, str], dict]) -> dict:
-  """The rows of `out`/results.json evaluated with the `settings` of their (suite, row), as a
-  report; empty when there is no such file."""
+def kept_rows(out: pathlib.Path, settings: dict[tuple[str, str], dict]) -> tuple[dict, list]:
+  """(the rows of `out`/results.json that a resumed evaluation keeps, as a report; the (suite,
+  row) of those this invocation does not evaluate): every row evaluated with the `settings` of
+  its (suite, row), and every row of another suite, policy or protocol, which it leaves as it
+  was. Empty when there is no such file; a kept row that does not hold together is refused."""
   path = out / 'results.json'
   if not path.exists():
-    return {}
+    return {}, []
   try:
     data = json.loads(path.read_text())
   except (OSError, ValueError, RecursionError) as e:
     raise ResultsError(f'{path}: cannot read evaluation results to resume '
                        f'({type(e).__name__}: {str(e)[:120]})') from None
-  report = {}
-  for (suite, label), wanted in settings.items():
-    rows = data.get(suite) if isinstance(data, dict) else None
-    row = rows.get(label) if isinstance(rows, dict) else None
-    if isinstance(row, dict) and row.get('settings') == wanted:
+  if not isinstance(data, dict) or not all(isinstance(rows, dict) for rows in data.values()):
+    raise ResultsError(f'{path}: not the results of mvcoba-eval (suite -> method -> results)')
+  report, others = {}, []
+  for suite, rows in data.items():
+    for label, row in rows.items():
+      wanted = settings.get((suite, label))
+      if wanted is None:
+        others.append((suite, label))
+      elif not (isinstance(row, dict) and row.get('settings') == wanted):
+        continue
       report.setdefault(suite, {})[label] = rescored(row, f'{path}: {suite}/{label}')
-  return report
+  return report, others
 
 
 def in_order(report: dict, keys) -> dict:
-  """`report` with its suites and rows in the order of the (suite, row) `keys`."""
+  """`report` with the (suite, row) `keys` first, in their order, then its other rows as they
+  were."""
   ordered = {}
   for suite, label in keys:
     if label in report.get(suite, {}):
       ordered.setdefault(suite, {})[label] = report[suite][label]
+  for suite, rows in report.items():
+    for label, row in rows.items():
+      ordered.setdefault(suite, {}).setdefault(label, row)
   return ordered
 
 

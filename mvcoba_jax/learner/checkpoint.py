@@ -24,15 +24,6 @@ class CheckpointError(RuntimeError):
   """A checkpoint that is missing or cannot be restored into this run."""
 
 
-def _flatten(tree, prefix=''):
-  if isinstance(tree, dict):
-    out = {}
-    for k, v in tree.items():
-      out.update(_flatten(v, f'{prefix}{k}.'))
-    return out
-  return {prefix[:-1]: tree}
-
-
 def _lookup(flat: dict, key: str) -> dict:
   return {k: v for k, v in flat.items() if k == key or k.startswith(key + '.')}
 
@@ -46,7 +37,7 @@ def incompatibilities(saved: dict, current: dict, where) -> list[str]:
     saved = config_lib.to_dict(config_lib.from_dict(saved))
   except config_lib.ConfigError as e:
     raise CheckpointError(f'checkpoint {where}: its saved config: {e}') from None
-  a, b = _flatten(json.loads(json.dumps(saved))), _flatten(json.loads(json.dumps(current)))
+  a, b = (config_lib.flat(json.loads(json.dumps(d))) for d in (saved, current))
   problems = []
   for key in SHAPE_KEYS:
     sa, sb = _lookup(a, key), _lookup(b, key)

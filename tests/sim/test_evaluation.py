@@ -474,6 +474,14 @@ def test_evaluate_and_join_as_library_calls(setup, tmp_path):
       row['cases']['pair']['grasp_success']
   with pytest.raises(api.EvaluationError, match='a baseline has none'):
     mvcoba_jax.evaluate(suites=[str(folder)], baseline='heuristic', protocol='online')
+  # Another suite resumed into the same folder: the first suite's row stays.
+  (tmp_path / 'b').mkdir()
+  (tmp_path / 'b' / 'one.scn').write_text('cube red 0.05 0.0 0\n')
+  mvcoba_jax.evaluate(suites=[str(tmp_path / 'b')], baseline='heuristic', config='tiny', runs=1,
+                      max_actions=MAX_ACTIONS, out=tmp_path / 'o', resume=True, progress=False)
+  both = json.loads((tmp_path / 'o' / 'results.json').read_text())
+  assert list(both) == [str(tmp_path / 'b'), str(folder)]
+  assert both[str(folder)]['baseline:heuristic']['runs'] == row['runs']
 
 
 def test_videos_where_a_file_stands_are_refused_before_any_run(setup, tmp_path, capsys):

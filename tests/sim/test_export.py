@@ -275,6 +275,23 @@ def test_export_folder_loads_back_as_the_same_policy(run, exported, parity, stat
                              parity['rendered'][0], atol=1e-6)
 
 
+def test_an_export_is_never_replaced_unasked(run, exported, tmp_path, capsys):
+  """mvcoba-export into a folder that holds an export is refused before anything is written,
+  and replaces it whole with --overwrite."""
+  from mvcoba_jax.cli import export as export_cli
+  folder = tmp_path / 'shipped'
+  shutil.copytree(exported[0]['params'].parent, folder)
+  (folder / 'model.json').write_text('{"kept": true}')
+  args = ['--checkpoint', str(run[1]), '--out', str(folder)]
+  assert export_cli.main(args) == 2
+  assert 'holds results of an earlier run' in capsys.readouterr().err
+  assert (folder / 'model.json').read_text() == '{"kept": true}'
+  assert export_cli.main([*args, '--overwrite']) == 0
+  assert json.loads((folder / 'model.json').read_text())['source']['checkpoint_step'] == 8
+  assert sorted(p.name for p in folder.iterdir()) == ['.lock', 'model.json', 'model.onnx',
+                                                      'params.npz']
+
+
 def test_export_folder_of_another_network_is_a_clear_error(exported, tmp_path):
   folder = tmp_path / 'other'
   shutil.copytree(exported[0]['params'].parent, folder)

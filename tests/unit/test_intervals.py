@@ -80,7 +80,8 @@ def test_starts_give_every_case_its_objects_in_play_beside_its_files_count():
   assert report.starts({'a': [log(5), log(5)]}, {'a': 6}) == ('a 5/6', 'a 5/6')
 
 
-def test_resumed_evaluation_keeps_only_rows_with_the_same_settings(tmp_path):
+def test_resumed_evaluation_keeps_rows_of_the_same_settings_and_every_row_it_does_not_redo(
+    tmp_path):
   import dataclasses
   import json
 
@@ -90,17 +91,23 @@ def test_resumed_evaluation_keeps_only_rows_with_the_same_settings(tmp_path):
   settings = {'checkpoint': 'runs/x', 'step': 8, 'params': 'ab12', 'cases': ['a'], 'runs': 1,
               'max_actions': 4, 'seed': 0, 'set': []}
   row = {'runs': runs, 'wall_s': 9.0, 'settings': settings}
-  written = {'random': {'mvcoba': row, 'vpg': row | {'settings': settings | {'step': 16}}},
-             'ordered': {'mvcoba': {'runs': runs, 'wall_s': 3.0}}}  # written before settings
+  written = {'random': {'mvcoba': row, 'vpg': row | {'settings': settings | {'step': 16}},
+                        'mvcoba [online]': row},  # another protocol: not redone, kept
+             'ordered': {'mvcoba': {'runs': runs, 'wall_s': 3.0}},  # written before settings
+             'occluded': {'cpg': row}}  # another suite: kept
   (tmp_path / 'results.json').write_text(json.dumps(written))
   wanted = {(s, m): settings for s in ('ordered', 'random') for m in ('vpg', 'mvcoba')}
-  kept = report.kept_rows(tmp_path, wanted)
-  assert list(kept) == ['random'] and list(kept['random']) == ['mvcoba']
+  kept, others = report.kept_rows(tmp_path, wanted)
+  assert others == [('random', 'mvcoba [online]'), ('occluded', 'cpg')]
+  assert list(kept) == ['random', 'occluded'] and list(kept['random']) == ['mvcoba',
+                                                                             'mvcoba [online]']
   mean = kept['random']['mvcoba']['mean']  # scored again: no grasp succeeded, none undefined
   assert mean['grasp_success'] == 0.0 and kept['random']['mvcoba']['settings'] == settings
-  assert list(report.in_order({'random': {'vpg': 1, 'mvcoba': 2}, 'ordered': {'vpg': 3}},
-                              wanted)) == ['ordered', 'random']
-  assert report.kept_rows(tmp_path / 'none', wanted) == {}
+  ordered = report.in_order({'random': {'vpg': 1, 'mvcoba': 2, 'x': 4}, 'ordered': {'vpg': 3}},
+                            wanted)
+  assert list(ordered) == ['ordered', 'random'] and list(ordered['random']) == ['vpg', 'mvcoba',
+                                                                                'x']
+  assert report.kept_rows(tmp_path / 'none', wanted) == ({}, [])
   (tmp_path / 'results.json').write_text('{')
   with pytest.raises(report.ResultsError, match='results.json: cannot read'):
     report.kept_rows(tmp_path, wanted)
