@@ -3,6 +3,7 @@ or from a folder that `mvcoba-export` wrote (model.json, params.npz), which trav
 training state."""
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import pathlib
@@ -19,6 +20,8 @@ from mvcoba_jax.learner import networks
 from mvcoba_jax.learner.checkpoint import CheckpointError, Checkpoints, incompatibilities
 
 FORMAT = 'mvcoba-jax-export/1'
+PARAM_LIMIT = 1e6  # no trained weight comes near this; a larger one is damage, not learning
+STEP_LIMIT = 10 ** 12  # actions: more than any training here could take
 
 
 class PolicyError(RuntimeError):
@@ -115,6 +118,20 @@ def flat_params(model: networks.QNetwork) -> dict[str, np.ndarray]:
   return out
 
 
+def _described(described: dict, config: Config):
+  """(key, what model.json says, what its own config gives) of the fields model.json derives
+  from its config: a hand-edited config that the ONNX graph and the arrays were not made for
+  disagrees with them."""
+  side = round(2 * config.scene.workspace_half / config.perception.heightmap_resolution)
+  got = lambda *keys: functools.reduce(lambda d, k: d.get(k) if isinstance(d, dict) else None,
+                                       keys, described)
+  return [('method', got('method'), config.network.method),
+          ('rotations.num_rotations', got('rotations', 'num_rotations'),
+           config.env.num_rotations),
+          ('heightmap.grid_size', got('heightmap', 'grid_size'), side),
+          ('heightmap.num_views', got('heightmap', 'num_views'), len(config.scene.cameras))]
+
+
 def load_exported(folder) -> tuple[Config, networks.QNetwork, int]:
   """(config, Q-network, step) from what `export` wrote: a trained policy without its training
   state (replay, optimiser), small enough to ship, as `pretrained/` does.
@@ -130,8 +147,12 @@ def load_exported(folder) -> tuple[Config, networks.QNetwork, int]:
       raise ValueError(f'format {described.get("format")!r}, expected {FORMAT!r}')
     config = _config(described['config'], model_path)
     step = described['source']['checkpoint_step']
-    if isinstance(step, bool) or not isinstance(step, int) or step < 0:
+    if isinstance(step, bool) or not isinstance(step, int) or not 0 <= step <= STEP_LIMIT:
       raise ValueError(f'source.checkpoint_step {str(step)[:40]!r} is not a step count')
+    untied = [f'{key} {value!r} (its config gives {own!r})'
+              for key, value, own in _described(described, config) if value != own]
+    if untied:
+      raise ValueError('its description and its config disagree: ' + '; '.join(untied))
     model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
   except (OSError, ValueError, TypeError, KeyError, AttributeError, RecursionError) as e:
     raise PolicyError(f'{model_path}: not an export of mvcoba_jax ({type(e).__name__}: {e})'
@@ -150,7 +171,10 @@ def load_exported(folder) -> tuple[Config, networks.QNetwork, int]:
               + [f'{n}: dtype {got[n].dtype}, the network needs {want[n][1]}'
                  for n in both if got[n].dtype != want[n][1]]
               + [f'{n}: holds NaN or infinite values' for n in both
-                 if got[n].dtype == want[n][1] and not np.isfinite(got[n]).all()])
+                 if got[n].dtype == want[n][1] and not np.isfinite(got[n]).all()]
+              + [f'{n}: holds values beyond +-{PARAM_LIMIT:g}' for n in both
+                 if got[n].dtype == want[n][1] and np.isfinite(got[n]).all()
+                 and got[n].size and np.abs(got[n]).max() > PARAM_LIMIT])
   if problems:
     raise PolicyError(f'{params_path} does not fit the {config.network.method} network of '
                       f'{model_path}:\n  ' + '\n  '.join(problems[:10]))

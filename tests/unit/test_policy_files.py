@@ -77,6 +77,10 @@ def test_non_finite_and_wrong_dtype_params(saved, tmp_path):
   arrays[second] = arrays[second].astype(np.float64)
   np.savez(folder / 'params.npz', **arrays)
   _refused(folder, f'{first}: holds NaN', f'{second}: dtype float64')
+  arrays = _arrays(_copy(saved[1], tmp_path / 'large'))
+  arrays[first] = np.full_like(arrays[first], 3e38)
+  np.savez(folder / 'params.npz', **arrays)
+  _refused(folder, f'{first}: holds values beyond')
 
 
 @pytest.mark.parametrize('edit, says', [
@@ -86,6 +90,9 @@ def test_non_finite_and_wrong_dtype_params(saved, tmp_path):
     (lambda d: d['source'].update(checkpoint_step=float('inf')), "checkpoint_step 'inf'"),
     (lambda d: d['source'].update(checkpoint_step=-3), "checkpoint_step '-3'"),
     (lambda d: d.update(format='other/1'), "format 'other/1'"),
+    (lambda d: d['source'].update(checkpoint_step=10 ** 30), "checkpoint_step '1000000"),
+    (lambda d: d['config']['env'].update(num_rotations=8),
+     'rotations.num_rotations 16 (its config gives 8)'),
 ])
 def test_bad_model_json(saved, tmp_path, edit, says):
   folder = _copy(saved[1], tmp_path)
