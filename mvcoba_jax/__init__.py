@@ -10,7 +10,7 @@ __version__ = '0.1.0'
 
 def __getattr__(name: str):
   if name in ('train', 'sweep', 'evaluate', 'join_evaluations', 'load_policy', 'TrainResult',
-              'TrainError', 'EvaluationError'):
+              'TrainError', 'EvaluationError', 'Error'):
     from mvcoba_jax import api  # noqa: PLC0415
     return getattr(api, name)
   if name == 'reproduce':

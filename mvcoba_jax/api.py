@@ -22,8 +22,9 @@ from tensorboardX import SummaryWriter
 from tqdm import tqdm
 
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import folders, runtime, video, viz
-from mvcoba_jax.config import Config
+from mvcoba_jax import arguments, folders, runtime, video, viz
+from mvcoba_jax import methods as methods_lib
+from mvcoba_jax.config import Config, Error
 from mvcoba_jax.evaluation import paper, runner
 from mvcoba_jax.evaluation import report as report_lib
 from mvcoba_jax.learner import sharding
@@ -53,7 +54,7 @@ SCALARS = ('loss', 'epsilon', 'grasp_success', 'actions_per_s', 'episodes', 'upd
            'skipped_updates', 'health_resets')
 
 
-class TrainError(ValueError):
+class TrainError(Error):
   """A run that cannot start or continue: its config, work directory or checkpoint; the message
   names which."""
 
@@ -80,7 +81,14 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
   serve. On several devices the tabletops and replay are sharded (`sharding.py`); process 0
   writes the logs.
   """
-  workdir = pathlib.Path(workdir)
+  call = 'mvcoba_jax.train'
+  config, workdir = arguments.config(call, config), arguments.path(call, 'workdir', workdir)
+  resume, overwrite = (arguments.flag(call, n, v) for n, v in (('resume', resume),
+                                                                ('overwrite', overwrite)))
+  eval_actions = arguments.count(call, 'eval_actions', eval_actions, 0, MAX_ACTIONS_LIMIT)
+  progress = arguments.flag(call, 'progress', progress)
+  if resume and overwrite:
+    raise TrainError(f'{call}: resume continues the run and overwrite deletes it: give one')
   if resume:  # before anything is created or compiled
     if not holds_checkpoint(workdir):
       raise TrainError(f'resume: {workdir / "checkpoints"} holds no checkpoint')
@@ -250,6 +258,14 @@ def sweep(config: Config, workdir, *, methods=None, seeds=None, resume: bool = F
   checkpoint (a mistyped folder). `mvcoba_jax.evaluate` of the runs' folders then gives each
   method's interval over the seeds.
   """
+  call = 'mvcoba_jax.sweep'
+  config, workdir = arguments.config(call, config), arguments.path(call, 'workdir', workdir)
+  methods = None if methods is None else arguments.names(call, 'methods', methods,
+                                                         methods_lib.names())
+  seeds = None if seeds is None else arguments.counts(call, 'seeds', seeds, 0, 2 ** 31 - 1)
+  for name, value in (('resume', resume), ('overwrite', overwrite), ('progress', progress)):
+    arguments.flag(call, name, value)
+  arguments.count(call, 'eval_actions', eval_actions, 0, MAX_ACTIONS_LIMIT)
   try:
     runs = sweep_runs(config, workdir, methods, seeds)
   except config_lib.ConfigError as e:
@@ -305,9 +321,10 @@ RESULT_FILES = ('results.json', 'results.md', 'comparison.md', 'visuals', 'video
 MAX_ACTIONS_LIMIT = 10_000  # per run: counters and traces grow with it
 MAX_BATCH_RUNS = 4096  # cases x runs of a suite step in one batch, each a whole tabletop
 PROTOCOLS = ('frozen', 'online', 'no-repeat')
+BASELINES = ('heuristic',)  # policies without training (`runner.heuristic_policy`)
 
 
-class EvaluationError(ValueError):
+class EvaluationError(Error):
   """An evaluation that cannot run as asked: its policies, cases, settings or output folder;
   the message names which."""
 
@@ -363,8 +380,29 @@ def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, ru
   JAX's compiled programs are released after each row (`jax.clear_caches`), the caller's too.
   Raises EvaluationError before anything compiles when an input cannot serve.
   """
-  if protocol not in PROTOCOLS:
-    raise EvaluationError(f'protocol {protocol!r}: one of {", ".join(PROTOCOLS)}')
+  call = 'mvcoba_jax.evaluate'
+  checkpoints = arguments.paths(call, 'checkpoints', checkpoints, at_least=0)
+  suites = arguments.names(call, 'suites', suites)
+  if baseline is not None:
+    arguments.choice(call, 'baseline', baseline, BASELINES)
+  if not checkpoints and baseline is None:
+    raise EvaluationError(f'{call}: nothing to evaluate: give checkpoints or a baseline')
+  # their ranges: `check_work`, with the suites' sizes
+  runs, max_actions = (arguments.count(call, n, v, -2 ** 63, 2 ** 63)
+                       for n, v in (('runs', runs), ('max_actions', max_actions)))
+  seed = arguments.count(call, 'seed', seed, 0, 2 ** 31 - 1)
+  protocol = arguments.choice(call, 'protocol', protocol, PROTOCOLS)
+  if config is not None:
+    arguments.path(call, 'config', config)
+  overrides = arguments.names(call, 'overrides', overrides, at_least=0)
+  blocks = arguments.names(call, 'blocks', blocks, at_least=0, distinct=False)
+  if fit_overlaps is not None:
+    fit_overlaps = arguments.number(call, 'fit_overlaps', fit_overlaps, 1e-9, MAX_FIT_BOUND)
+  out = arguments.path(call, 'out', out)
+  for name, value in (('allow_bad_cases', allow_bad_cases), ('resume', resume),
+                      ('overwrite', overwrite), ('save_visuals', save_visuals),
+                      ('video', video), ('progress', progress)):
+    arguments.flag(call, name, value)
   if protocol != 'frozen' and baseline:
     raise EvaluationError(f'the {protocol} protocol changes how a trained network acts; a '
                           'baseline has none')
@@ -537,6 +575,10 @@ def join_evaluations(evaluations, out, *, overwrite: bool = False) -> dict:
   """The results.json of evaluations run apart (their output folders) as one report, scored
   again from their runs, written to `out` with comparison.md (ours beside the paper's); a
   folder given twice, or an `out` holding results without `overwrite`, is refused."""
+  call = 'mvcoba_jax.join_evaluations'
+  evaluations = arguments.paths(call, 'evaluations', evaluations)
+  out = arguments.path(call, 'out', out)
+  arguments.flag(call, 'overwrite', overwrite)
   try:
     folders.check(out, RESULT_FILES, overwrite=overwrite)
     report = report_lib.joined_report([str(e) for e in evaluations])

@@ -22,11 +22,12 @@ from mvcoba_jax.sim.config import (
   CameraConfig,
   ConfigError,
   EnvConfig,
+  Error,
   SceneConfig,
   check,
 )
 
-__all__ = ['CameraConfig', 'Config', 'ConfigError', 'EnvConfig', 'NetworkConfig',
+__all__ = ['CameraConfig', 'Config', 'ConfigError', 'EnvConfig', 'Error', 'NetworkConfig',
            'PerceptionConfig', 'SceneConfig', 'TrainConfig']
 
 

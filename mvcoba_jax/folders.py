@@ -12,11 +12,13 @@ import os
 import pathlib
 import shutil
 
+from mvcoba_jax.config import Error
+
 LOCK_NAME = '.lock'
 _held: dict[pathlib.Path, object] = {}  # folder -> its open lock file, kept for the process
 
 
-class FolderError(RuntimeError):
+class FolderError(Error):
   """A folder that cannot be written: not a folder, in use, or holding results to keep."""
 
 
@@ -28,7 +30,12 @@ def check(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: 
   path = pathlib.Path(folder)
   if path.exists() and not path.is_dir():
     raise FolderError(f'{path} is a file, not a folder')
-  if not path.is_dir():
+  if not path.is_dir():  # it would be made: its nearest existing parent must take it
+    parent = next(p for p in path.absolute().parents if p.exists())
+    if not parent.is_dir():
+      raise FolderError(f'{path}: {parent} is a file, not a folder')
+    if not os.access(parent, os.W_OK | os.X_OK):
+      raise FolderError(f'{path}: {parent} is not writable')
     return path
   if path.resolve() not in _held:
     _lock(path).close()  # closing the file releases the lock

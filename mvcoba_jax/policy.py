@@ -14,8 +14,9 @@ import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
+from mvcoba_jax import arguments
 from mvcoba_jax import config as config_lib
-from mvcoba_jax.config import Config
+from mvcoba_jax.config import Config, Error
 from mvcoba_jax.learner import networks
 from mvcoba_jax.learner.checkpoint import CheckpointError, Checkpoints, incompatibilities
 
@@ -24,7 +25,7 @@ PARAM_LIMIT = 1e6  # no trained weight comes near this; a larger one is damage, 
 STEP_LIMIT = 10 ** 12  # actions: more than any training here could take
 
 
-class PolicyError(RuntimeError):
+class PolicyError(Error):
   """A folder that holds no usable policy; the message names the path or config keys."""
 
 
@@ -56,7 +57,7 @@ def load(workdir) -> tuple[Config, networks.QNetwork, int]:
   network's parameters alone are read (`Checkpoints.restore_params`): no scene, physics, replay
   or optimiser is built or read.
   """
-  workdir = pathlib.Path(workdir)
+  workdir = arguments.path('mvcoba_jax.load_policy', 'workdir', workdir)
   if (workdir / 'model.json').is_file():
     return load_exported(workdir)
   config_path = workdir / 'config.json'

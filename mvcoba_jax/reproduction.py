@@ -15,7 +15,8 @@ import pathlib
 import shutil
 import time
 
-from mvcoba_jax import api, folders
+from mvcoba_jax import api, arguments, folders
+from mvcoba_jax import methods as methods_lib
 from mvcoba_jax.config import Config, ConfigError, validate
 from mvcoba_jax.evaluation import paper
 from mvcoba_jax.evaluation.report import write_whole
@@ -36,8 +37,9 @@ PROTOCOLS = {
 }
 
 
-def reproduce(config: Config, *, methods=paper.PAPER_NAMES, seeds=(0, 1, 2), actions: int = 3000,
-              runs: int = 5, max_actions: int = 60, suites=('random', 'ordered', 'occluded'),
+def reproduce(config: Config, *, methods=tuple(paper.PAPER_NAMES), seeds=(0, 1, 2, 3, 4),
+              actions: int = 3000, runs: int = 5, max_actions: int = 60,
+              suites=('random', 'ordered', 'occluded', 'vpg'),
               workdir='runs/reproduction', out='docs/results/reproduction',
               protocols=tuple(PROTOCOLS), progress: bool = True) -> dict[str, dict]:
   """Trains `methods` x `seeds` of `config` for `actions` actions each into WORKDIR/METHOD-sSEED
@@ -49,12 +51,18 @@ def reproduce(config: Config, *, methods=paper.PAPER_NAMES, seeds=(0, 1, 2), act
   keeping every row it finished. Raises api.TrainError or api.EvaluationError before anything
   trains when an input cannot serve (the evaluation's work bounds, the output folders).
   """
-  say = print if progress else (lambda *a, **k: None)
-  unknown = set(protocols) - set(PROTOCOLS)
-  if unknown or not protocols:
-    raise api.EvaluationError(f'protocols {sorted(unknown) or "none"}: give some of '
-                              f'{", ".join(PROTOCOLS)}')
-  workdir, out = pathlib.Path(workdir), pathlib.Path(out)
+  call = 'mvcoba_jax.reproduce'
+  config = arguments.config(call, config)
+  methods = arguments.names(call, 'methods', methods, methods_lib.names())
+  seeds = arguments.counts(call, 'seeds', seeds, 0, 2 ** 31 - 1)
+  actions = arguments.count(call, 'actions', actions, 1, 10 ** 9)
+  # their ranges: `api.check_work`, with the suites' sizes
+  runs, max_actions = (arguments.count(call, n, v, -2 ** 63, 2 ** 63)
+                       for n, v in (('runs', runs), ('max_actions', max_actions)))
+  suites = arguments.names(call, 'suites', suites)
+  protocols = arguments.names(call, 'protocols', protocols, tuple(PROTOCOLS))
+  workdir, out = arguments.path(call, 'workdir', workdir), arguments.path(call, 'out', out)
+  say = print if arguments.flag(call, 'progress', progress) else (lambda *a, **k: None)
   try:  # what the evaluation would refuse, refused before the sweep trains
     files = suite_files(list(suites))
     api.check_work(runs, max_actions, files)

@@ -38,7 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
   parser.add_argument('--checkpoint', '--compare', nargs='+', default=[],
                       help='work directories of mvcoba-train runs, or folders written by '
                            'mvcoba-export (e.g. pretrained/mvcoba)')
-  parser.add_argument('--baseline', choices=('heuristic',),
+  parser.add_argument('--baseline', choices=api.BASELINES,
                       help='a policy that needs no checkpoint')
   parser.add_argument('--tables', nargs='+', default=[], metavar='EVAL_DIR',
                       help='--out folders of earlier evaluations: print and write their joined '
@@ -95,7 +95,7 @@ def main(argv=None) -> int:
       parser.error('--tables joins earlier results; give it without --checkpoint or --baseline')
     try:
       api.join_evaluations(args.tables, args.out, overwrite=args.overwrite)
-    except api.EvaluationError as e:
+    except config_lib.Error as e:
       return fail(e)
     out = pathlib.Path(args.out)
     print((out / 'results.md').read_text())
@@ -123,7 +123,7 @@ def main(argv=None) -> int:
                  fit_overlaps=None if args.fit_overlaps is None else args.fit_overlaps / 1000,
                  out=args.out, resume=args.resume,
                  overwrite=args.overwrite, save_visuals=args.save_visuals, video=args.video)
-  except api.EvaluationError as e:
+  except config_lib.Error as e:
     return fail(e)
   return 0
 

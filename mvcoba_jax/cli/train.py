@@ -78,7 +78,7 @@ def main(argv=None) -> int:
     else:
       api.train(config, args.workdir, resume=args.resume, overwrite=args.overwrite,
                 eval_actions=args.eval_actions)
-  except api.TrainError as e:
+  except config_lib.Error as e:
     return fail(e)
   return 0
 

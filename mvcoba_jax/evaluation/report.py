@@ -11,6 +11,7 @@ import pathlib
 import numpy as np
 
 from mvcoba_jax import config as config_lib
+from mvcoba_jax.config import Error
 from mvcoba_jax.evaluation import intervals, metrics
 
 METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action efficiency (%)'),
@@ -23,7 +24,7 @@ METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action
 RANGES = {key: (0.0, 100.0) if label.endswith('(%)') else (0.0, math.inf) for key, label in METRICS}
 
 
-class ResultsError(ValueError):
+class ResultsError(Error):
   """An earlier evaluation's results.json that --tables cannot use."""
 
 

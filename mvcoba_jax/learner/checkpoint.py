@@ -14,13 +14,14 @@ import jax
 import orbax.checkpoint as ocp
 
 from mvcoba_jax import config as config_lib
+from mvcoba_jax.config import Error
 
 # Config sections that fix the shapes of the saved state; they must match to resume.
 SHAPE_KEYS = ('scene', 'perception', 'network', 'num_envs', 'train.replay_capacity',
               'env.num_objects', 'env.num_rotations')
 
 
-class CheckpointError(RuntimeError):
+class CheckpointError(Error):
   """A checkpoint that is missing or cannot be restored into this run."""
 
 

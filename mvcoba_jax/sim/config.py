@@ -20,7 +20,13 @@ BACKENDS = ('auto', 'native', 'mjx', 'warp')
 DROPS = ('spread', 'heap')  # env.drop
 
 
-class ConfigError(ValueError):
+class Error(ValueError):
+  """What mvcoba-jax cannot use, said in one line that names it (a file and line, a config key
+  and its range, an argument): every error the library raises for its input is one of these
+  (`mvcoba_jax.Error`), so a script catches one class."""
+
+
+class ConfigError(Error):
   """A preset, override or saved config that does not fit the configuration schema."""
 
 

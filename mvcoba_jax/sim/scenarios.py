@@ -37,6 +37,7 @@ import mujoco
 import numpy as np
 
 from mvcoba_jax.sim import shapes
+from mvcoba_jax.sim.config import Error
 from mvcoba_jax.sim.geometry import euler_xyz_matrix, matrix_to_quat, quat_mul, yaw_quat
 from mvcoba_jax.sim.scene import park_position
 from mvcoba_jax.sim.tabletop import Layout
@@ -68,7 +69,7 @@ SAME_SPOT = 0.005  # m: two objects whose centres are closer than this are place
 MAX_CASE_OBJECTS = 128  # objects in one case: each takes an object slot of the compiled scene
 
 
-class ScenarioError(ValueError):
+class ScenarioError(Error):
   """A case file or case that cannot be loaded; the message names the file and line."""
 
 

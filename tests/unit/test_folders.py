@@ -123,9 +123,10 @@ def test_a_long_error_is_cut_to_short_lines(capsys):
 def test_reproduction_refuses_what_its_evaluation_would_before_training(tmp_path, capsys):
   from mvcoba_jax.cli import reproduce
   started = time.perf_counter()
-  for argv, says in ((['--runs', '1000000000'], '--runs 1000000000 x 3 cases of suite occluded'),
+  for argv, says in ((['--runs', '1000000000'], '--runs 1000000000 x 12 cases of suite occluded'),
                      (['--max-actions', '0'], '--max-actions 0: allowed range'),
-                     (['--workdir', str(tmp_path / 'file')], 'is a file, not a folder')):
+                     (['--workdir', str(tmp_path / 'file')], 'is a file, not a folder'),
+                     (['--out', str(tmp_path / 'file' / 'x')], 'file is a file, not a folder')):
     (tmp_path / 'file').write_text('')
     assert reproduce.main(['--config', 'tiny', '--suites', 'occluded', '--out',
                            str(tmp_path / 'out'), *argv]) == 2

@@ -103,7 +103,7 @@ def test_wheel_carries_presets_suites_and_entry_points(tmp_path):
                   str(source)], check=True, capture_output=True, timeout=600)
   wheel, = tmp_path.glob('mvcoba_jax-*.whl')
   names = zipfile.ZipFile(wheel).namelist()
-  for suite, count in (('random', 6), ('ordered', 6), ('occluded', 3), ('isolated', 16)):
+  for suite, count in (('random', 6), ('ordered', 6), ('occluded', 12), ('isolated', 16)):
     assert sum(n.startswith(f'mvcoba_jax/suites/{suite}/') and n.endswith('.scn')
                for n in names) == count, suite
   assert sum(n.startswith('mvcoba_jax/suites/vpg/test-10-obj-') for n in names) == 11
