@@ -270,15 +270,15 @@ def load_preset(preset: str | pathlib.Path) -> Config:
     module = importlib.util.module_from_spec(spec)
     try:
       spec.loader.exec_module(module)
-    except Exception as e:  # a user's Python file: any error is theirs to see, named
-      raise ConfigError(f'config preset {path}: {type(e).__name__}: {e}') from None
+    except (Exception, SystemExit) as e:  # a user's Python file: its error is theirs, named
+      raise ConfigError(f'config preset {path}: {type(e).__name__}: {str(e)[:200]}') from None
   if not hasattr(module, 'get_config'):
     raise ConfigError(f'config preset {preset} defines no get_config()')
   try:
     config = module.get_config()
   except ConfigError:
     raise
-  except Exception as e:  # a user's Python: any error is theirs to see, named
+  except (Exception, SystemExit) as e:  # a user's Python: its error is theirs, named
     raise ConfigError(f'config preset {preset}: get_config() raised {type(e).__name__}: '
                       f'{str(e)[:200]}') from None
   if not isinstance(config, Config):

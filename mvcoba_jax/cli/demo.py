@@ -44,6 +44,8 @@ def main(argv=None) -> int:
   config_lib.add_arguments(parser)
   parser.add_argument('--actions', type=int, default=4, help='primitives per environment')
   args = parser.parse_args(argv)
+  if args.actions < 1:
+    parser.error(f'--actions {args.actions}: at least 1')
   try:
     config = config_lib.from_arguments(args)
   except config_lib.ConfigError as e:

@@ -91,8 +91,9 @@ def main(argv=None) -> int:
   parser = build_parser()
   args = parser.parse_args(argv)
   if args.tables:
-    if args.checkpoint or args.baseline:
-      parser.error('--tables joins earlier results; give it without --checkpoint or --baseline')
+    if args.checkpoint or args.baseline or args.online or args.no_repeat or args.resume:
+      parser.error('--tables joins earlier results; give it without --checkpoint, --baseline, '
+                   '--online, --no-repeat or --resume')
     try:
       api.join_evaluations(args.tables, args.out, overwrite=args.overwrite)
     except config_lib.Error as e:

@@ -190,3 +190,13 @@ def test_replay_ratio_sets_the_updates_per_lockstep_action():
     assert updates * config.train.batch_size / envs == 1
   assert resolve('default', ['num_envs=64']).updates_per_step == 1  # off: one update a step
   assert resolve('default', ['num_envs=2', 'train.replay_ratio=0.5']).updates_per_step == 1
+
+
+def test_a_preset_that_exits_is_a_config_error(tmp_path):
+  preset = tmp_path / 'quits.py'
+  preset.write_text('import sys\nsys.exit(3)\n')
+  with pytest.raises(ConfigError, match='quits.py: SystemExit: 3'):
+    resolve(str(preset))
+  preset.write_text('import sys\ndef get_config():\n  sys.exit(4)\n')
+  with pytest.raises(ConfigError, match='get_config\\(\\) raised SystemExit: 4'):
+    resolve(str(preset))

@@ -132,3 +132,21 @@ def test_reproduction_refuses_what_its_evaluation_would_before_training(tmp_path
                            str(tmp_path / 'out'), *argv]) == 2
     assert says in capsys.readouterr().err
   assert time.perf_counter() - started < 20 and not (tmp_path / 'sweep').exists()
+
+
+@pytest.mark.parametrize('command, argv, says', [
+    ('demo', ['--actions', '-1'], '--actions -1: at least 1'),
+    ('eval', ['--tables', 'a', '--online'], 'give it without --checkpoint, --baseline, --online'),
+    ('train', ['--config', 'tiny', '--seeds', '0', '0', '--workdir', 'x'], 'given twice'),
+    ('train', ['--config', 'tiny', '--eval-actions', '-5', '--workdir', 'x'], 'eval_actions=-5'),
+])
+def test_commands_refuse_nonsense_in_one_line(tmp_path, capsys, monkeypatch, command, argv, says):
+  import importlib
+  monkeypatch.chdir(tmp_path)
+  main = importlib.import_module(f'mvcoba_jax.cli.{command}').main
+  try:
+    code = main(argv)
+  except SystemExit as e:  # argparse's refusal
+    code = e.code
+  assert code == 2 and says in capsys.readouterr().err
+  assert list(tmp_path.iterdir()) == []
