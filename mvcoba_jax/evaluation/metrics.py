@@ -48,6 +48,8 @@ def run_log(data, where: str) -> RunLog:
   if not log.grasp_successes <= log.grasp_attempts <= log.actions:
     raise ValueError(f'{where}: grasp_successes {log.grasp_successes} <= grasp_attempts '
                      f'{log.grasp_attempts} <= actions {log.actions} does not hold')
+  if log.picked and not log.grasp_successes:  # one grasp may lift several, none lifts none
+    raise ValueError(f'{where}: picked {log.picked} objects without a successful grasp')
   if log.picked + log.lost > log.objects or log.completed and log.picked != log.objects:
     raise ValueError(f'{where}: picked {log.picked} and lost {log.lost} do not fit objects '
                      f'{log.objects} (completed: {log.completed})')

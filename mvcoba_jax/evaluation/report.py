@@ -327,7 +327,36 @@ def rescored(result, where: str) -> dict:
   except ValueError as e:
     raise ResultsError(str(e)) from None
   wall = result.get('wall_s')
-  if wall is not None and (isinstance(wall, bool) or not isinstance(wall, (int, float))):
-    raise ResultsError(f'{where}.wall_s: expected seconds, got {str(wall)[:40]!r}')
+  if wall is not None and (isinstance(wall, bool) or not isinstance(wall, (int, float))
+                           or not 0 <= wall < WALL_LIMIT_S):
+    raise ResultsError(f'{where}.wall_s: expected seconds in [0, {WALL_LIMIT_S:g}), got '
+                       f'{str(wall)[:40]!r}')
+  if 'settings' in result:
+    fitting_settings(result['settings'], by_case, where)
   return scored(by_case, wall) | (
       {'settings': result['settings']} if 'settings' in result else {})
+
+
+WALL_LIMIT_S = 10 ** 7  # seconds a row could take: about four months
+
+
+def fitting_settings(settings, by_case: dict, where: str) -> None:
+  """Raises ResultsError when a row's runs do not fit the settings it records: its cases, runs
+  per case, action cap and the objects each case file lists (each that the settings hold)."""
+  if not isinstance(settings, dict):
+    raise ResultsError(f'{where}.settings: expected an object, got {str(settings)[:40]!r}')
+  cases, runs, cap = settings.get('cases'), settings.get('runs'), settings.get('max_actions')
+  listed = settings.get('listed_objects')
+  if cases is not None and (not isinstance(cases, list) or sorted(cases) != sorted(by_case)):
+    raise ResultsError(f'{where}.settings.cases: {str(cases)[:80]} are not the cases of its runs '
+                       f'({", ".join(sorted(by_case))[:80]})')
+  for name, logs in by_case.items():
+    if runs is not None and len(logs) != runs:
+      raise ResultsError(f'{where}.runs.{name}: {len(logs)} runs where its settings say {runs}')
+    if cap is not None and any(log.actions > cap for log in logs):
+      raise ResultsError(f'{where}.runs.{name}: a run took more actions than the cap of {cap} '
+                         'its settings give')
+    if (isinstance(listed, dict) and isinstance(listed.get(name), int)
+        and any(log.objects > listed[name] for log in logs)):
+      raise ResultsError(f'{where}.runs.{name}: a run began with more objects than the '
+                         f'{listed[name]} its case file lists')

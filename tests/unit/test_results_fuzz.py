@@ -54,3 +54,34 @@ def test_fuzzed_results_are_refused_in_one_line_or_accepted(tmp_path, capsys):
     if code == 2:
       assert err.startswith('error: ') and err.count('\n') == 1 and len(err) < 400, err
   assert outcomes[2] > 100 and outcomes[0] > 0, outcomes
+
+
+def test_rows_that_do_not_fit_their_own_settings_are_refused_naming_the_field(tmp_path, capsys):
+  """The issue's tampered rows, each refused by --tables in one line that names the field; the
+  untouched row is accepted."""
+  settings = {'cases': ['c0'], 'runs': 2, 'max_actions': 10, 'listed_objects': {'c0': 4}}
+  good = copy.deepcopy(VALID)
+  good['ordered']['mvcoba']['settings'] = settings
+  tampered = [
+      (lambda r: r['settings'].update(cases=['c0', 'c9']), 'settings.cases'),
+      (lambda r: r['settings'].update(runs=3), '2 runs where its settings say 3'),
+      (lambda r: r['settings'].update(max_actions=1), 'more actions than the cap of 1'),
+      (lambda r: r['runs']['c0'][0].update(objects=10 ** 6, completed=False),
+       'more objects than the 4'),
+      (lambda r: r['runs']['c0'][1].update(grasp_successes=0, grasp_attempts=0, picked=1),
+       'picked 1 objects without a successful grasp'),
+      (lambda r: r.update(wall_s=-5), 'wall_s'),
+      (lambda r: r.update(wall_s=1e308), 'wall_s'),
+  ]
+  for i, (edit, says) in enumerate([(lambda r: None, None)] + tampered):
+    data = copy.deepcopy(good)
+    edit(data['ordered']['mvcoba'])
+    folder = tmp_path / f'e{i}'
+    folder.mkdir()
+    (folder / 'results.json').write_text(json.dumps(data))
+    code = eval_cli.main(['--tables', str(folder), '--out', str(tmp_path / f'o{i}')])
+    err = capsys.readouterr().err
+    if says is None:
+      assert code == 0, err
+    else:
+      assert code == 2 and says in err and err.count('\n') == 1, (says, err)
