@@ -1,17 +1,18 @@
 #!/usr/bin/env bash
-# Copies a study's finished evaluations and its log into docs/results/recipe/STAGE (screen by
-# default; the layout recipe_table.py reads: eval/NAME/results.json, study.jsonl) and writes its
-# table beside them. The log joins the one landed before (a study resumed in another sitting
+# Copies a study's finished evaluations (eval/NAME, and eval-online/NAME of its --protocol online
+# runs) and its log into docs/results/recipe/STAGE (screen by default; the layout recipe_table.py
+# reads: eval/NAME/results.json, study.jsonl) and writes its table beside them. The log joins the one landed before (a study resumed in another sitting
 # with --landed writes a new one), each entry once.
 #   bash experiments/land.sh /work/study-recipe [screen|confirm]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 study=$1 screen=docs/results/recipe/${2:-screen}
 mkdir -p "$screen/eval"
-for d in "$study"/eval/*/; do
+for d in "$study"/eval*/*/; do  # eval/ (frozen) and eval-online/
   [ -f "$d/done" ] || continue
-  mkdir -p "$screen/eval/$(basename "$d")"
-  cp "$d/results.json" "$d/results.md" "$d/done" "$screen/eval/$(basename "$d")/"
+  to="$screen/$(basename "$(dirname "$d")")/$(basename "$d")"
+  mkdir -p "$to"
+  cp "$d/results.json" "$d/results.md" "$d/done" "$to/"
 done
 touch "$screen/study.jsonl"
 cat "$screen/study.jsonl" "$study/study.jsonl" | awk '!seen[$0]++' > "$screen/.study.jsonl"

@@ -5,13 +5,15 @@ recipe trained longer.
 
   python experiments/recipe_study.py [--variants NAME ...] [--methods M ...] [--seeds 0 1]
                                      [--runs 3] [--workdir runs/recipe] [--suites DIR ...]
-                                     [--landed DIR]
+                                     [--landed DIR] [--protocol frozen|online]
 
 Every run trains with `mvcoba-train --method M` into WORKDIR/VARIANT/M-sSEED and is evaluated
 with `mvcoba-eval` into WORKDIR/eval/VARIANT-sSEED (MV-COBA) or WORKDIR/eval/VARIANT-M-sSEED; a
 run already trained or evaluated is passed over, so the study continues where a killed one
 stopped, and with `--landed DIR` (a study's folder under docs/results, as experiments/land.sh
-writes it) so does a run whose evaluation landed there from an earlier sitting. A variant that continues another (`CONTINUES`)
+writes it) so does a run whose evaluation landed there from an earlier sitting. `--protocol
+online` evaluates with `mvcoba-eval --online` into WORKDIR/eval-online/NAME instead (the paper's
+test protocol; the same trained runs). A variant that continues another (`CONTINUES`)
 starts from a copy of that variant's finished run of the same seed and resumes it to its own
 total. Then `mvcoba-eval --tables` joins every
 evaluation into WORKDIR/tables, whose rows group by training config: one interval per variant
@@ -122,19 +124,22 @@ def main(argv=None) -> int:
                                                       ('val-random', 'val-ordered',
                                                        'val-occluded')])
   parser.add_argument('--landed', help='a landed study folder whose evaluations are done')
+  parser.add_argument('--protocol', choices=('frozen', 'online'), default='frozen')
   args = parser.parse_args(argv)
   work = (ROOT / args.workdir).resolve()
   work.mkdir(parents=True, exist_ok=True)
   log = work / 'study.jsonl'
   evaluations = []
   landed = pathlib.Path(args.landed).resolve() if args.landed else None
+  evals = 'eval' if args.protocol == 'frozen' else f'eval-{args.protocol}'
+  online = ['--online'] if args.protocol == 'online' else []
   for seed in args.seeds:  # every variant's first seed before any second
     for variant in args.variants:
       for method in args.methods:
         name = run_name(variant, method, seed)
-        if landed and (landed / 'eval' / name / 'done').is_file():
+        if landed and (landed / evals / name / 'done').is_file():
           continue
-        train_dir, eval_dir = work / variant / f'{method}-s{seed}', work / 'eval' / name
+        train_dir, eval_dir = work / variant / f'{method}-s{seed}', work / evals / name
         if variant in CONTINUES and not train_dir.exists():
           start = work / CONTINUES[variant] / f'{method}-s{seed}'
           if not (start / 'eval_summary.json').is_file():
@@ -152,14 +157,15 @@ def main(argv=None) -> int:
             continue
         if not (eval_dir / 'results.json').is_file() or not (eval_dir / 'done').is_file():
           if not run(['mvcoba-eval', '--checkpoint', str(train_dir), '--suite', *args.suites,
-                      '--runs', str(args.runs), '--out', str(eval_dir), '--resume'],
-                     log, f'eval-{name}'):
+                      '--runs', str(args.runs), '--out', str(eval_dir), '--resume', *online],
+                     log, f'{evals}-{name}'):
             continue
           (eval_dir / 'done').touch()
         evaluations.append(str(eval_dir))
   if evaluations:
-    run(['mvcoba-eval', '--tables', *evaluations, '--out', str(work / 'tables'), '--overwrite'],
-        log, 'tables')
+    tables = work / evals.replace('eval', 'tables')
+    run(['mvcoba-eval', '--tables', *evaluations, '--out', str(tables),
+         '--overwrite'], log, 'tables')
   return 0
 
 

@@ -89,7 +89,15 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
   progress = arguments.flag(call, 'progress', progress)
   if resume and overwrite:
     raise TrainError(f'{call}: resume continues the run and overwrite deletes it: give one')
-  if resume:  # before anything is created or compiled
+  try:  # before anything is created or compiled: a folder held, a file where a folder goes
+    if jax.process_index() == 0:  # the lead process holds the folder (the others write beside)
+      folders.check(workdir, RUN_FILES, keep=resume, overwrite=overwrite)
+  except folders.FolderError as e:
+    raise TrainError(str(e)) from None
+  for name in ('checkpoints', 'tensorboard'):
+    if (workdir / name).exists() and not (workdir / name).is_dir():
+      raise TrainError(f'{workdir / name} is a file, where the run\'s {name} go')
+  if resume:
     if not holds_checkpoint(workdir):
       raise TrainError(f'resume: {workdir / "checkpoints"} holds no checkpoint')
     resumable(config, workdir)

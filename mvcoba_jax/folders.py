@@ -37,7 +37,7 @@ def check(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: 
     if not os.access(parent, os.W_OK | os.X_OK):
       raise FolderError(f'{path}: {parent} is not writable')
     return path
-  if path.resolve() not in _held:
+  if path.resolve() not in _held and (path / LOCK_NAME).exists():  # none: nobody holds it
     _lock(path).close()  # closing the file releases the lock
   found = [name for name in earlier if (path / name).exists()]
   if found and not keep and not overwrite:

@@ -16,7 +16,7 @@ import sys
 import jax
 
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import runtime
+from mvcoba_jax import folders, runtime
 from mvcoba_jax.sim.scenarios import ScenarioError, case_to_layout, read_case
 from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites.cases import pool_for, suite_config
@@ -39,6 +39,12 @@ def main(argv=None) -> int:
     parser.error(f'--save-state {args.save_state}: exists; remove it or name another file')
   if args.save_state and args.save_state.suffix != '.npz':
     parser.error(f'--save-state {args.save_state}: name an .npz file')
+  try:  # where the pictures and the state go, checked before anything renders
+    folders.check(args.out)
+    if args.save_state:
+      folders.check(args.save_state.parent)
+  except folders.FolderError as e:
+    parser.error(str(e))
   try:
     config = config_lib.from_arguments(args)
     scene = config.scene

@@ -150,3 +150,22 @@ def test_commands_refuse_nonsense_in_one_line(tmp_path, capsys, monkeypatch, com
     code = e.code
   assert code == 2 and says in capsys.readouterr().err
   assert list(tmp_path.iterdir()) == []
+
+
+def test_files_where_folders_go_are_refused_before_anything_compiles(tmp_path, capsys):
+  from mvcoba_jax.cli import train as train_cli
+  from mvcoba_jax.cli import viz as viz_cli
+  started = time.perf_counter()
+  run = tmp_path / 'run'
+  run.mkdir()
+  (run / 'tensorboard').write_text('not a folder')
+  assert train_cli.main(['--config', 'tiny', '--workdir', str(run), '--overwrite']) == 2
+  assert 'tensorboard is a file' in capsys.readouterr().err
+  assert sorted(p.name for p in run.iterdir()) == ['tensorboard']
+  case = tmp_path / 'one.scn'
+  case.write_text('cube red 0 0 0\n')
+  for argv in (['--out', str(case)], ['--save-state', str(case / 'state.npz')]):
+    with pytest.raises(SystemExit) as exit_:
+      viz_cli.main([str(case), '--config', 'tiny', *argv])
+    assert exit_.value.code == 2 and 'is a file, not a folder' in capsys.readouterr().err
+  assert time.perf_counter() - started < 20
