@@ -21,6 +21,7 @@ from mvcoba_jax.config import Config, ConfigError, validate
 from mvcoba_jax.evaluation import paper
 from mvcoba_jax.evaluation.report import write_whole
 from mvcoba_jax.learner.checkpoint import holds_checkpoint
+from mvcoba_jax.learner.run_log import plot_sweep
 from mvcoba_jax.sim.scenarios import ScenarioError
 from mvcoba_jax.suites import suite_files
 
@@ -37,13 +38,21 @@ PROTOCOLS = {
 }
 
 
-def reproduce(config: Config, *, methods=tuple(paper.PAPER_NAMES), seeds=(0, 1, 2, 3, 4),
+# method -> the preset it trains with in the reproduction: the one it validated best with in the
+# per-method screen of issue 52 (docs/results/recipe/baselines); until that screen has landed,
+# every method trains the default preset's recipe.
+RECIPES = {method: 'default' for method in paper.PAPER_NAMES}
+
+
+def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
+              seeds=(0, 1, 2, 3, 4),
               actions: int = 3000, runs: int = 5, max_actions: int = 60,
               suites=('random', 'ordered', 'occluded', 'vpg'),
               workdir='runs/reproduction', out='docs/results/reproduction',
               protocols=tuple(PROTOCOLS), progress: bool = True) -> dict[str, dict]:
-  """Trains `methods` x `seeds` of `config` for `actions` actions each into WORKDIR/METHOD-sSEED
-  (`api.sweep`), evaluates them on `suites` under each of `protocols` (`api.evaluate`; frozen in
+  """Trains `methods` x `seeds` for `actions` actions each into WORKDIR/METHOD-sSEED (`api.sweep`),
+  each method with its config in `recipes` (method -> Config or preset name; `RECIPES` is the
+  screen's choice) or else `config`, evaluates them on `suites` under each of `protocols` (`api.evaluate`; frozen in
   `out`, online in OUT/online) and writes each protocol's comparison.md (ours beside the
   paper's, with the time spent) and the sweep's curves to `out`. Returns protocol -> report.
 
@@ -70,9 +79,10 @@ def reproduce(config: Config, *, methods=tuple(paper.PAPER_NAMES), seeds=(0, 1, 
       folders.check(folder, keep=True)
   except (folders.FolderError, ScenarioError) as e:
     raise api.EvaluationError(str(e)) from None
+  recipes = {m: arguments.config(call, (recipes or {}).get(m, config)) for m in methods}
   try:
-    config = validate(dataclasses.replace(config, train=dataclasses.replace(
-        config.train, total_actions=actions)))
+    recipes = {m: validate(dataclasses.replace(c, train=dataclasses.replace(
+        c.train, total_actions=actions))) for m, c in recipes.items()}
   except ConfigError as e:
     raise api.TrainError(str(e)) from None
   trainings = len(methods) * len(seeds)
@@ -83,8 +93,10 @@ def reproduce(config: Config, *, methods=tuple(paper.PAPER_NAMES), seeds=(0, 1, 
       f'{runs} runs: expected about {expected / 60:.0f} min on a 2-core CPU', flush=True)
   start = time.perf_counter()
   resume = workdir.is_dir() and any(holds_checkpoint(p) for p in workdir.iterdir())
-  dirs = list(api.sweep(config, workdir, methods=methods, seeds=seeds, resume=resume,
-                        progress=progress))
+  dirs = [run for method in methods  # each method its own recipe: a sweep of its seeds
+          for run in api.sweep(recipes[method], workdir, methods=[method], seeds=seeds,
+                               resume=resume, progress=progress)]
+  plot_sweep(dirs, config.train.curve_window, workdir)
   reports, eval_s = {}, 0.0
   for protocol in protocols:
     reports[protocol] = api.evaluate(dirs, suites, runs=runs, max_actions=max_actions,

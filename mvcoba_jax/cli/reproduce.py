@@ -8,7 +8,8 @@ seeds beside the paper's figures (`mvcoba_jax.reproduction.reproduce`).
                    [--protocols frozen online]
                    [--config default] [--set KEY=VALUE ...]
 
-A killed reproduction resumes where it stopped: training from each run's latest checkpoint,
+Each method trains the preset it validated best with (`reproduction.RECIPES`) unless --config
+or --set names one config for all. A killed reproduction resumes where it stopped: training from each run's latest checkpoint,
 evaluation keeping every (suite, policy) row it finished. Each test protocol (--protocols: frozen
 in --out, online in --out/online) gets the evaluation's results.json and results.md and
 comparison.md (ours beside the paper's, per suite); --out also gets the sweep's training
@@ -24,7 +25,7 @@ from mvcoba_jax import methods
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.cli import fail
 from mvcoba_jax.evaluation import paper
-from mvcoba_jax.reproduction import PROTOCOLS, reproduce
+from mvcoba_jax.reproduction import PROTOCOLS, RECIPES, reproduce
 from mvcoba_jax.suites import SUITES
 
 
@@ -53,7 +54,9 @@ def main(argv=None) -> int:
   except config_lib.ConfigError as e:
     parser.error(str(e))
   try:
-    reproduce(config, methods=args.methods, seeds=args.seeds, actions=args.actions,
+    # --config or --set: every method trains that config; else each its screened recipe
+    recipes = None if args.config or args.overrides else RECIPES
+    reproduce(config, recipes=recipes, methods=args.methods, seeds=args.seeds, actions=args.actions,
               runs=args.runs, max_actions=args.max_actions, suites=args.suites,
               workdir=args.workdir, out=args.out, protocols=args.protocols)
   except config_lib.Error as e:
