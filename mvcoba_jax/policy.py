@@ -3,10 +3,12 @@ or from a folder that `mvcoba-export` wrote (model.json, params.npz), which trav
 training state."""
 from __future__ import annotations
 
+import dataclasses
 import functools
 import hashlib
 import json
 import pathlib
+import typing
 import warnings
 
 import jax
@@ -17,7 +19,9 @@ from flax import nnx
 from mvcoba_jax import arguments
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Config, Error
-from mvcoba_jax.learner import networks
+from mvcoba_jax import methods
+from mvcoba_jax.learner import agent, networks
+from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.learner.checkpoint import CheckpointError, Checkpoints, incompatibilities
 
 FORMAT = 'mvcoba-jax-export/1'
@@ -27,6 +31,51 @@ STEP_LIMIT = 10 ** 12  # actions: more than any training here could take
 
 class PolicyError(Error):
   """A folder that holds no usable policy; the message names the path or config keys."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Decision:
+  """The action a policy takes on one observation, in the workspace frame (m, rad)."""
+  primitive: str  # 'push' or 'grasp'
+  rotation: int  # index k: angle k * 2 pi / num_rotations
+  angle: float  # the gripper's yaw and the push direction, anticlockwise from +x
+  row: int  # heightmap cell: row grows with y, col with x
+  col: int
+  x: float  # the cell's centre
+  y: float
+  z: float  # the highest surface the method's views see in the cell
+  q: float  # the rule's score of the action
+
+
+class Policy(typing.NamedTuple):
+  """A trained policy: its config, Q-network and training step (it unpacks as that triple), and
+  the action its method's rule takes on an observation (`act`), as evaluation takes it."""
+  config: Config
+  network: networks.QNetwork
+  step: int
+
+  def q_maps(self, color, depth) -> np.ndarray:
+    """(2, K, R, R) Q maps (push, grasp) of one observation: colour (V, R, R, 3) in 0..1 and
+    height above the table (V, R, R) in m of every camera's heightmap."""
+    return np.asarray(self.network(jnp.asarray(color, jnp.float32)[None],
+                                   jnp.asarray(depth, jnp.float32)[None])[0])
+
+  def act(self, color, depth, changed: bool = True) -> Decision:
+    """The greedy action on one observation (`q_maps`' arguments): the method's rule picks the
+    primitive (MV-COBA's: grasp when the last action changed the scene, `changed`, else the
+    higher of the two maps' maxima) and the argmax rotation and cell of its map."""
+    method = methods.get(self.config.network.method)
+    depth = jnp.asarray(depth, jnp.float32)[None]
+    maps = agent.rule_maps(jnp.asarray(self.q_maps(color, depth[0]))[None], depth, method,
+                           self.config)
+    pick = agent.greedy_actions(maps, jnp.asarray([changed]), method)
+    world = agent.to_world(pick, depth, method.views, self.config)
+    k = int(pick.rotation[0])
+    return Decision(primitive=('push', 'grasp')[int(pick.primitive[0])], rotation=k,
+                    angle=float(rotation_angle(k, self.config.env.num_rotations)),
+                    row=int(pick.row[0]), col=int(pick.col[0]), x=float(world.x[0]),
+                    y=float(world.y[0]), z=float(world.z[0]),
+                    q=float(maps[0, pick.primitive[0], k, pick.row[0], pick.col[0]]))
 
 
 def _config(saved: dict, path: pathlib.Path) -> Config:
@@ -49,9 +98,9 @@ def fingerprint(model: networks.QNetwork) -> str:
   return digest.hexdigest()[:16]
 
 
-def load(workdir) -> tuple[Config, networks.QNetwork, int]:
-  """(config, Q-network, step) of the latest checkpoint in a training work directory, or of
-  a folder that `export` wrote (model.json, params.npz: see `load_exported`).
+def load(workdir) -> Policy:
+  """The `Policy` (config, Q-network, step) of the latest checkpoint in a training work
+  directory, or of a folder that `export` wrote (model.json, params.npz: see `load_exported`).
 
   For a work directory the config (config.json) is checked against the checkpoint's, then the
   network's parameters alone are read (`Checkpoints.restore_params`): no scene, physics, replay
@@ -101,7 +150,7 @@ def load(workdir) -> tuple[Config, networks.QNetwork, int]:
   if bad:
     raise PolicyError(f'checkpoint {where}: parameters hold NaN or infinite values '
                       f'({", ".join(bad[:3])}{", ..." if len(bad) > 3 else ""})')
-  return config, model, step
+  return Policy(config, model, step)
 
 
 def flat_params(model: networks.QNetwork) -> dict[str, np.ndarray]:
@@ -133,9 +182,9 @@ def _described(described: dict, config: Config):
           ('heightmap.num_views', got('heightmap', 'num_views'), len(config.scene.cameras))]
 
 
-def load_exported(folder) -> tuple[Config, networks.QNetwork, int]:
-  """(config, Q-network, step) from what `export` wrote: a trained policy without its training
-  state (replay, optimiser), small enough to ship, as `pretrained/` does.
+def load_exported(folder) -> Policy:
+  """The `Policy` (config, Q-network, step) from what `export` wrote: a trained policy without
+  its training state (replay, optimiser), small enough to ship, as `pretrained/` does.
 
   Every parameter must be in params.npz with the shape the network of model.json's config
   expects; otherwise the error names the arrays that differ.
@@ -187,4 +236,4 @@ def load_exported(folder) -> tuple[Config, networks.QNetwork, int]:
   state = nnx.state(model)
   nnx.replace_by_pure_dict(state, filled(nnx.to_pure_dict(state), ''))
   nnx.update(model, state)
-  return config, model, step
+  return Policy(config, model, step)

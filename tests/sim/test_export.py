@@ -339,6 +339,31 @@ def test_shipped_example_state_is_an_input_of_the_shipped_policy():
   assert 0.0 <= color.min() and color.max() <= 1.0 and 0.02 < depth.max() < 0.2
 
 
+def test_a_loaded_policy_acts_as_evaluation_does():
+  """`load_policy(...).act` on the shipped example state takes the action the evaluation's
+  greedy policy takes (the method's rule over the argmax rotation and cell), in both branches of
+  MV-COBA's rule, with the cell's centre and surface height in the workspace frame."""
+  from mvcoba_jax import perception
+  from mvcoba_jax.evaluation import runner
+  loaded = policy.load(ROOT / 'pretrained' / 'mvcoba')
+  config, model, step = loaded
+  state = np.load(ROOT / 'pretrained' / 'example-state.npz')
+  obs = perception.Observation(color=jnp.asarray(state['color'])[None],
+                               depth=jnp.asarray(state['depth'])[None],
+                               seen=jnp.asarray(state['depth'])[None] > 0)
+  greedy, _ = runner.make_policy((config, model, step), config)
+  for changed in (True, False):
+    chosen = greedy(obs, jnp.asarray([changed]), None, None)
+    decision = loaded.act(state['color'], state['depth'], changed)
+    assert (decision.primitive, decision.rotation, decision.row, decision.col) == (
+        ('push', 'grasp')[int(chosen.primitive[0])], int(chosen.rotation[0]),
+        int(chosen.row[0]), int(chosen.col[0]))
+    res, half = config.perception.heightmap_resolution, config.scene.workspace_half
+    assert decision.x == pytest.approx(-half + (decision.col + 0.5) * res, abs=1e-6)
+    assert decision.z == pytest.approx(state['depth'][:, decision.row, decision.col].max())
+  assert loaded.act(state['color'], state['depth'], True).primitive == 'grasp'
+
+
 def test_missing_work_directory_is_a_clear_error(tmp_path):
   missing = tmp_path / 'nowhere'
   with pytest.raises(policy.PolicyError, match='nowhere'):
