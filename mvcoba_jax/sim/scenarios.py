@@ -99,8 +99,12 @@ class Case:
   parked_lines: tuple[int, ...] = ()  # VPG lines outside VPG's workspace: parked, not in play
 
 
+MESSAGE_LIMIT = 300  # characters of an error: a field of a damaged file can be megabytes
+
+
 def _error(path, line: int, field: str, message: str) -> ScenarioError:
-  return ScenarioError(f'{path}:{line}: field {field!r}: {message}')
+  text = f'{path}:{line}: field {field[:40]!r}: {message}'
+  return ScenarioError(text if len(text) <= MESSAGE_LIMIT else text[:MESSAGE_LIMIT - 3] + '...')
 
 
 def _number(path, line: int, field: str, text: str) -> float:

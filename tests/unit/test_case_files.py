@@ -162,3 +162,11 @@ def test_mvcoba_authors_block_table(tmp_path):
   assert any('interpenetrate' in m for m in overlaps(vpg, env))
   with pytest.raises(ScenarioError, match="unknown block table 'lego'"):
     read_case(path, blocks='lego')
+
+
+def test_an_error_about_a_huge_field_is_one_short_line(tmp_path):
+  path = tmp_path / 'huge.scn'
+  path.write_text('cube red ' + 'x' * 100_000 + ' 0 0\n')
+  with pytest.raises(ScenarioError) as error:
+    read_case(path)
+  assert len(str(error.value)) <= 300 and "huge.scn:1: field 'x'" in str(error.value)
