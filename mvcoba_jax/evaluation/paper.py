@@ -120,3 +120,31 @@ def comparisons(results: dict[str, dict]) -> str:
                  + '\n\nWhere our intervals separate (A > B: disjoint, A higher):\n\n'
                  + separations(ours))
   return '\n\n'.join(parts)
+
+
+def summary(results: dict[str, dict], suites=('random', 'ordered', 'occluded')) -> str:
+  """Markdown of one compact table for a README: per method (rows) and suite, our grasp success
+  with its 95% interval over seeds and our objects picked, each with the paper's figure in
+  brackets, in whole per cent. The full tables are `comparisons`."""
+  over = {suite: report.seed_intervals(results[suite], minimum=1) for suite in suites
+          if suite in results}
+  head = ('| method | seeds | ' + ' | '.join(f'{s}: grasp % | picked %' for s in over)
+          + ' |\n|---|---|' + '---|---|' * len(over))
+  whole = lambda v: f'{v:.0f}'
+  lines = [head]
+  for method in dict.fromkeys(m for rows in over.values() for m in rows):
+    name = PAPER_NAMES.get(report.method_of(method), method)
+    cells, seeds = [], set()
+    for suite, rows in over.items():
+      entry, paper = rows.get(method), RESULTS.get(suite, {}).get(name, {})
+      theirs = lambda key: f' ({whole(paper[key])})' if key in paper else ''
+      grasp, picked = (entry or {}).get('grasp_success'), (entry or {}).get('objects_picked')
+      seeds.add((entry or {}).get('seeds'))
+      cells += ['-' if grasp is None else
+                f'{whole(grasp[0])}' + ('' if math.isnan(grasp[1]) else
+                                        f' [{whole(grasp[1])}, {whole(grasp[2])}]')
+                + theirs('grasp_success'),
+                '-' if picked is None else whole(picked[0]) + theirs('completion')]
+    count = '/'.join(str(s) for s in sorted(s for s in seeds if s))
+    lines.append(f'| {name} | {count} | ' + ' | '.join(cells) + ' |')
+  return '\n'.join(lines)

@@ -31,14 +31,22 @@ def test_every_path_the_docs_name_exists():
   assert not missing, '\n'.join(missing)
 
 
-def test_the_readme_results_are_the_reproductions_tables():
-  """The README's results tables are copied from mvcoba-reproduce's comparison.md of each landed
-  protocol (frozen, and online once it has finished), row for row and in order: a new
-  reproduction is not half taken over."""
+def test_the_results_are_the_reproductions_tables():
+  """reproduction.md holds mvcoba-reproduce's frozen comparison.md row for row and in order, and
+  the README its compact summary of the same results (`paper.summary`): a new reproduction is
+  not half taken over."""
+  from mvcoba_jax.evaluation import paper, report
   folder = ROOT / 'docs' / 'results' / 'reproduction'
-  frozen, online = folder / 'comparison.md', folder / 'online' / 'comparison.md'
-  readme = [line for line in (ROOT / 'README.md').read_text().splitlines() if line.startswith('|')]
-  for comparison in [frozen] + ([online] if online.exists() else []):
-    rows = [line for line in comparison.read_text().splitlines() if line.startswith('|')]
-    at = next((i for i in range(len(readme)) if readme[i:i + len(rows)] == rows), None)
-    assert rows and at is not None, 'README.md results differ from ' + str(comparison)
+  page = [line for line in (ROOT / 'docs' / 'results' / 'reproduction.md').read_text().splitlines()
+          if line.startswith('|')]
+  rows = [line for line in (folder / 'comparison.md').read_text().splitlines()
+          if line.startswith('|')]
+  assert rows and any(page[i:i + len(rows)] == rows for i in range(len(page))), \
+      'reproduction.md differs from ' + str(folder / 'comparison.md')
+  summary = paper.summary(report.joined_report([str(folder)]))
+  assert summary in (ROOT / 'README.md').read_text(), 'README.md results differ from the summary'
+
+
+def test_the_readme_is_for_users():
+  lines = (ROOT / 'README.md').read_text().splitlines()
+  assert len(lines) <= 150 and max(map(len, lines)) <= 120
