@@ -1,0 +1,79 @@
+"""Depth (and colour) images of calibrated cameras to the heightmaps a trained policy acts on,
+built as training builds them (`mvcoba_jax/perception.py`): each view's points in the workspace
+frame, binned into the workspace grid, the highest point of a cell kept (heights in 10 um steps,
+clipped to [0, top]; points below -5 mm or above `top` dropped), a cell no point reaches left at
+0 and unseen. Missing depth (0, NaN or infinite) gives no point."""
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from mvcoba_jax.deploy.calibration import Calibration, Camera, DeployError
+
+HEIGHT_UNIT = 1e-5  # m: heights are kept in these steps, as in training
+BELOW_TABLE = -0.005  # m: points lower than this are not the table's
+
+
+def read_depth(path, camera: Camera) -> np.ndarray:
+  """A depth image file (16-bit PNG or any format OpenCV reads unchanged) in metres, checked
+  against the camera's size."""
+  image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+  if image is None:
+    raise DeployError(f'{path}: cannot read a depth image')
+  if image.ndim != 2:
+    raise DeployError(f'{path}: a depth image has one channel, this one {image.shape[2]}')
+  return image.astype(np.float64) * camera.depth_scale
+
+
+def points(depth: np.ndarray, camera: Camera, calibration: Calibration, where: str):
+  """(N, 3) workspace-frame points of a depth image (metres), with their pixel indices."""
+  if depth.shape != (camera.height, camera.width):
+    raise DeployError(f'{where}: depth image of {depth.shape[1]}x{depth.shape[0]} pixels, its '
+                      f'calibration says {camera.width}x{camera.height}')
+  valid = np.isfinite(depth) & (depth > 0)
+  if not valid.any():
+    raise DeployError(f'{where}: no valid depth in the image (a camera that returned nothing)')
+  v, u = np.nonzero(valid)
+  d = depth[v, u]
+  cam = np.stack([(u - camera.cx) / camera.fx * d, (v - camera.cy) / camera.fy * d, d,
+                  np.ones_like(d)])
+  world = calibration.base_to_workspace() @ camera.camera_to_base @ cam
+  return world[:3].T, v * camera.width + u
+
+
+def heightmaps(depths, calibration: Calibration, colors=None):
+  """(color (V, R, R, 3) in 0..1, depth (V, R, R) m, seen (V, R, R)) of one depth image per
+  camera of `calibration` (metres, (height, width)) and, optionally, one colour image each
+  (RGB, uint8 or 0..1; none: colour 0)."""
+  if len(depths) != len(calibration.cameras):
+    raise DeployError(f'{len(depths)} depth images for {len(calibration.cameras)} cameras')
+  r, half, res = calibration.grid, calibration.half, calibration.resolution
+  out_color = np.zeros((len(depths), r, r, 3), np.float32)
+  out_depth = np.zeros((len(depths), r, r), np.float32)
+  out_seen = np.zeros((len(depths), r, r), bool)
+  for i, (depth, camera) in enumerate(zip(depths, calibration.cameras)):
+    where = f'camera {camera.name}'
+    xyz, pixel = points(np.asarray(depth, np.float64), camera, calibration, where)
+    col = np.floor((xyz[:, 0] + half) / res).astype(np.int64)
+    row = np.floor((xyz[:, 1] + half) / res).astype(np.int64)
+    keep = ((row >= 0) & (row < r) & (col >= 0) & (col < r) & (xyz[:, 2] >= BELOW_TABLE)
+            & (xyz[:, 2] <= calibration.top))
+    height = np.round(np.clip(xyz[keep, 2], 0.0, calibration.top) / HEIGHT_UNIT).astype(np.int64)
+    cell = row[keep] * r + col[keep]
+    best = np.full(r * r, -1, np.int64)
+    np.maximum.at(best, cell, height)
+    seen = best >= 0
+    out_seen[i] = seen.reshape(r, r)
+    out_depth[i] = np.where(seen, best * HEIGHT_UNIT, 0.0).reshape(r, r)
+    if colors is not None:
+      image = np.asarray(colors[i])
+      if image.shape[:2] != depth.shape or image.ndim != 3 or image.shape[2] != 3:
+        raise DeployError(f'{where}: colour image of shape {image.shape}, its depth image is '
+                          f'{depth.shape[1]}x{depth.shape[0]} (RGB expected)')
+      rgb = image.reshape(-1, 3)[pixel[keep]].astype(np.float32)
+      rgb = rgb / 255.0 if image.dtype == np.uint8 else rgb
+      top = height == best[cell]  # the colour of the highest point of its cell
+      flat = out_color[i].reshape(-1, 3)
+      flat[cell[top]] = rgb[top]
+  return out_color, out_depth, out_seen
+

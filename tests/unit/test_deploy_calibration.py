@@ -1,0 +1,79 @@
+"""Calibration files, images and the deploy package's independence from JAX: every bad input is
+one line naming the file and the field."""
+import copy
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from mvcoba_jax.deploy import DeployError, heightmaps, load_calibration
+
+GOOD = {'workspace': {'center': [0.5, 0.0, 0.02], 'yaw_deg': 0.0, 'half': 0.224, 'top': 0.4,
+                      'resolution': 0.004},
+        'cameras': [{'name': 'left', 'width': 64, 'height': 48, 'fx': 60.0, 'fy': 60.0,
+                     'cx': 31.5, 'cy': 23.5, 'depth_scale': 0.001,
+                     'camera_to_base': [[1, 0, 0, 0.5], [0, -1, 0, 0], [0, 0, -1, 0.6],
+                                        [0, 0, 0, 1]]}]}
+
+
+def write(tmp_path, data, name='cal.json'):
+  path = tmp_path / name
+  path.write_text(json.dumps(data) if not isinstance(data, str) else data)
+  return path
+
+
+@pytest.mark.parametrize('edit, says', [
+    (lambda d: d['cameras'][0].pop('fx'), 'cameras[0].fx: missing'),
+    (lambda d: d['cameras'][0].update(fx=-3), 'cameras[0].fx'),
+    (lambda d: d['cameras'][0].update(K=[[60, 0, 31.5], [0, 60, 23.5], [0, 0, 1]]),
+     'give K or fx, fy, cx, cy, not both'),
+    (lambda d: d['cameras'][0].update(camera_to_base=[[2, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0],
+                                                       [0, 0, 0, 1]]), 'not a rigid transform'),
+    (lambda d: d['cameras'][0].update(camera_to_base=[[1, 0], [0, 1]]), 'expected a 4x4 matrix'),
+    (lambda d: d['cameras'][0].update(depth_scale=0), 'cameras[0].depth_scale'),
+    (lambda d: d['cameras'][0].update(width=2.5), 'cameras[0].width'),
+    (lambda d: d['cameras'][0].update(lens='wide'), "unknown field 'lens'"),
+    (lambda d: d['workspace'].update(resolution=0.003), 'does not tile'),
+    (lambda d: d['workspace'].pop('center'), 'workspace: fields'),
+    (lambda d: d.update(cameras=[]), 'at least one camera'),
+])
+def test_bad_calibration_is_one_line_naming_the_field(tmp_path, edit, says):
+  data = copy.deepcopy(GOOD)
+  edit(data)
+  with pytest.raises(DeployError) as error:
+    load_calibration(write(tmp_path, data))
+  assert says in str(error.value) and str(tmp_path / 'cal.json') in str(error.value)
+  assert '\n' not in str(error.value)
+
+
+def test_k_matrix_stands_for_the_intrinsics_and_bad_files_are_named(tmp_path):
+  data = copy.deepcopy(GOOD)
+  for key in ('fx', 'fy', 'cx', 'cy'):
+    data['cameras'][0].pop(key)
+  data['cameras'][0]['K'] = [[60, 0, 31.5], [0, 60, 23.5], [0, 0, 1]]
+  camera = load_calibration(write(tmp_path, data)).cameras[0]
+  assert (camera.fx, camera.fy, camera.cx, camera.cy) == (60, 60, 31.5, 23.5)
+  with pytest.raises(DeployError, match='cannot read a calibration'):
+    load_calibration(write(tmp_path, '{', 'broken.json'))
+
+
+def test_wrong_image_sizes_and_empty_depth_are_refused(tmp_path):
+  cal = load_calibration(write(tmp_path, GOOD))
+  with pytest.raises(DeployError, match='camera left: depth image of 10x10 pixels, its '
+                                        'calibration says 64x48'):
+    heightmaps([np.ones((10, 10))], cal)
+  with pytest.raises(DeployError, match='camera left: no valid depth'):
+    heightmaps([np.zeros((48, 64))], cal)
+  with pytest.raises(DeployError, match='2 depth images for 1 cameras'):
+    heightmaps([np.ones((48, 64))] * 2, cal)
+  _, depth, seen = heightmaps([np.full((48, 64), 0.58)], cal)  # a flat table 2 cm below: height 0
+  assert seen.any() and np.abs(depth[seen]).max() == 0.0
+
+
+def test_the_deploy_package_imports_without_jax_or_mujoco():
+  code = ('import sys; sys.modules["jax"] = None; sys.modules["mujoco"] = None\n'
+          'import mvcoba_jax.deploy\nprint("ok")')
+  out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, timeout=60)
+  assert out.stdout.strip() == 'ok', out.stderr[-400:]
