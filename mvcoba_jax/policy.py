@@ -62,8 +62,8 @@ class Policy(typing.NamedTuple):
 
   def act(self, color, depth, changed: bool = True) -> Decision:
     """The greedy action on one observation (`q_maps`' arguments): the method's rule picks the
-    primitive (MV-COBA's: grasp when the last action changed the scene, `changed`, else the
-    higher of the two maps' maxima) and the argmax rotation and cell of its map."""
+    primitive (MV-COBA's: grasp when the last action changed the scene, `changed`, else push;
+    model.json's `action_rule` says each method's) and the argmax rotation and cell of its map."""
     method = methods.get(self.config.network.method)
     depth = jnp.asarray(depth, jnp.float32)[None]
     maps = agent.rule_maps(jnp.asarray(self.q_maps(color, depth[0]))[None], depth, method,

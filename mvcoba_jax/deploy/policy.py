@@ -1,0 +1,110 @@
+"""An exported policy (`mvcoba-export`'s folder) acting on heightmaps with onnxruntime, its action
+checked before a robot may take it, and the change observation between two frames; numpy and
+onnxruntime only."""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import pathlib
+
+import numpy as np
+
+from mvcoba_jax.deploy.calibration import Calibration, DeployError
+
+
+@dataclasses.dataclass(frozen=True)
+class Action:
+  """A primitive for the robot, in its base frame (m, rad), with the cell and score it came from."""
+  primitive: str  # 'push' or 'grasp'
+  position: tuple[float, float, float]  # base frame: the cell's centre at its surface height
+  angle: float  # base frame: the gripper's yaw and the push direction about +z
+  rotation: int
+  row: int
+  col: int
+  q: float
+
+
+class OnnxPolicy:
+  """model.json and model.onnx of an export: the network's maps of a state and its method's
+  greedy rule (model.json's `action_rule`), as `examples/onnx_infer.py` applies them."""
+
+  def __init__(self, folder):
+    import onnxruntime as ort  # noqa: PLC0415 (only a policy needs it, not the heightmaps)
+    folder = pathlib.Path(folder)
+    try:
+      self.model = json.loads((folder / 'model.json').read_text())
+      onnx_file = folder / self.model['onnx']['file']
+    except (OSError, ValueError, KeyError, TypeError) as e:
+      raise DeployError(f'{folder / "model.json"}: not an export ({type(e).__name__}: '
+                        f'{str(e)[:120]})') from None
+    options = ort.SessionOptions()
+    options.log_severity_level = 3  # the converter's loose shape annotations only warn
+    try:
+      self.session = ort.InferenceSession(str(onnx_file), options,
+                                          providers=['CPUExecutionProvider'])
+    except Exception as e:  # noqa: BLE001 (onnxruntime raises its own kinds)
+      raise DeployError(f'{onnx_file}: cannot load the network ({str(e)[:160]})') from None
+
+  def check(self, calibration: Calibration) -> None:
+    """Refuses a calibration whose workspace grid is not the one the network was trained on."""
+    hm = self.model['heightmap']
+    if (abs(calibration.half - hm['workspace_half_m']) > 1e-9
+        or abs(calibration.resolution - hm['resolution_m']) > 1e-9):
+      raise DeployError(f'the calibration\'s workspace (half {calibration.half:g} m, resolution '
+                        f'{calibration.resolution:g} m) is not the policy\'s (half '
+                        f'{hm["workspace_half_m"]:g} m, resolution {hm["resolution_m"]:g} m)')
+
+  def choose(self, color, depth, changed: bool) -> tuple[int, int, int, int, float]:
+    """(primitive, rotation, row, col, score) of the greedy action on heightmaps of every view."""
+    (maps,) = self.session.run([self.model['action_rule']['maps']],
+                               {'color': np.asarray(color, np.float32)[None],
+                                'depth': np.asarray(depth, np.float32)[None]})
+    q = maps[0]
+    flat = q.reshape(q.shape[0], -1)
+    prims, rule = self.model['primitives'], self.model['action_rule']['name']
+    if rule == 'change':
+      primitive = prims['grasp'] if changed else prims['push']
+    elif rule == 'max_q':
+      primitive = int(np.argmax(flat.max(axis=1)))  # first maximum: push on a tie
+    else:
+      primitive = prims['grasp']
+    index = int(np.argmax(flat[primitive]))
+    rotation, row, col = (int(i) for i in np.unravel_index(index, q.shape[1:]))
+    return primitive, rotation, row, col, float(flat[primitive, index])
+
+  def act(self, color, depth, seen, changed: bool, calibration: Calibration) -> Action:
+    """The greedy action in the robot's base frame, refused (DeployError, with the reason) from
+    a frame where a camera saw none of the workspace, or when it would leave the workspace or
+    go below the table."""
+    self.check(calibration)
+    blind = [c.name for c, s in zip(calibration.cameras, np.asarray(seen)) if not s.any()]
+    if blind:
+      raise DeployError(f'refused: camera {", ".join(blind)} sees none of the workspace')
+    primitive, rotation, row, col, score = self.choose(color, depth, changed)
+    hm = self.model['heightmap']
+    res, half = hm['resolution_m'], hm['workspace_half_m']
+    x, y = -half + (col + 0.5) * res, -half + (row + 0.5) * res
+    z = float(np.asarray(depth)[hm['views_used'], row, col].max())
+    if not (abs(x) <= half and abs(y) <= half and 0.0 <= z <= calibration.top):
+      raise DeployError(f'refused: the action at ({x:.3f}, {y:.3f}, {z:.3f}) m leaves the '
+                        'workspace or goes below the table')
+    names = {v: k for k, v in self.model['primitives'].items()}
+    angle = self.model['rotations']['angles_rad'][rotation] + calibration.yaw
+    return Action(primitive=names[primitive],
+                  position=tuple(float(v) for v in calibration.workspace_to_base((x, y, z))),
+                  angle=math.remainder(angle, 2 * math.pi), rotation=rotation, row=row, col=col,
+                  q=score)
+
+  def changed(self, before, after) -> bool:
+    """Whether the scene changed between two frames' (depth, seen) heightmaps, as training
+    observes it (`perception.change_observed`, without the grasp's own success): more cells
+    than `change_area` / resolution^2 in some view changed height by between `change_min` and
+    `change_max` (model.json's config; VPG's 300 cells at 2 mm, 1 to 30 cm), cells missing
+    from either frame counting as unchanged."""
+    p = self.model['config']['perception']
+    (d0, s0), (d1, s1) = before, after
+    diff = np.abs(np.asarray(d1) - np.asarray(d0))
+    moved = (diff >= p['change_min']) & (diff <= p['change_max']) & s0 & s1
+    return bool((moved.sum(axis=(-2, -1)) > p['change_area'] / p['heightmap_resolution'] ** 2)
+                .any())
