@@ -61,6 +61,28 @@ def world_rays(mj_model: mujoco.MjModel, cams) -> tuple[np.ndarray, np.ndarray]:
   return np.concatenate(origins), np.concatenate(directions)
 
 
+def calibration(env) -> dict:
+  """The simulator's cameras as `mvcoba_jax.deploy` reads a lab's calibration file: OpenCV
+  intrinsics (pixel centres at integers), each camera's pose in the world (which is the
+  workspace frame, so the base frame here), depth in metres."""
+  data = mujoco.MjData(env.scene.mj_model)
+  mujoco.mj_kinematics(env.scene.mj_model, data)
+  mujoco.mj_camlight(env.scene.mj_model, data)
+  config, cams = env.config, []
+  for c, cam in enumerate(config.scene.cameras):
+    pose = np.eye(4)  # OpenCV's camera axes: x right, y down, looking along +z
+    pose[:3, :3] = data.cam_xmat[c].reshape(3, 3) @ np.diag([1.0, -1.0, -1.0])
+    pose[:3, 3] = data.cam_xpos[c]
+    f = focal_length(cam)
+    cams.append({'name': f'cam{c}', 'width': cam.width, 'height': cam.height, 'fx': f, 'fy': f,
+                 'cx': cam.width / 2 - 0.5, 'cy': cam.height / 2 - 0.5,
+                 'camera_to_base': pose.tolist(), 'depth_scale': 1.0})
+  return {'workspace': {'center': [0.0, 0.0, 0.0], 'yaw_deg': 0.0,
+                        'half': config.scene.workspace_half, 'top': config.scene.workspace_top,
+                        'resolution': config.perception.heightmap_resolution},
+          'cameras': cams}
+
+
 def render(env, state) -> tuple[CameraImage, ...]:
   """Every camera of the scene, for one environment (vmap over environments)."""
   cams = env.config.scene.cameras

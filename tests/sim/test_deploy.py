@@ -1,12 +1,12 @@
 """The deploy path against the training pipeline: depth images that the simulator's cameras
 render, written as 16-bit PNG files in millimetres with their true intrinsics and poses, give
 the heightmaps training builds of the same scenes, in any base frame the calibration names."""
+import importlib.util
 import math
 import pathlib
 
 import cv2
 import jax
-import mujoco
 import numpy as np
 import pytest
 
@@ -31,33 +31,15 @@ def scenes():
   return env, states, images, observed
 
 
-def camera_poses(env) -> list[np.ndarray]:
-  """Each camera's pose as OpenCV sees it (x right, y down, looking along +z), 4x4, in the
-  simulator's world (= the workspace frame)."""
-  data = mujoco.MjData(env.scene.mj_model)
-  mujoco.mj_kinematics(env.scene.mj_model, data)
-  mujoco.mj_camlight(env.scene.mj_model, data)
-  poses = []
-  for c in range(len(env.config.scene.cameras)):
-    pose = np.eye(4)
-    pose[:3, :3] = data.cam_xmat[c].reshape(3, 3) @ np.diag([1.0, -1.0, -1.0])
-    pose[:3, 3] = data.cam_xpos[c]
-    poses.append(pose)
-  return poses
-
-
 def calibration(env, base_from_workspace=np.eye(4), yaw_deg=0.0) -> dict:
-  config = env.config
-  cams = []
-  for cam, pose in zip(config.scene.cameras, camera_poses(env)):
-    f = cameras.focal_length(cam)
-    cams.append({'name': f'cam{len(cams)}', 'width': cam.width, 'height': cam.height, 'fx': f,
-                 'fy': f, 'cx': cam.width / 2 - 0.5, 'cy': cam.height / 2 - 0.5,
-                 'camera_to_base': (base_from_workspace @ pose).tolist(), 'depth_scale': 0.001})
-  return {'workspace': {'center': base_from_workspace[:3, 3].tolist(), 'yaw_deg': yaw_deg,
-                        'half': config.scene.workspace_half, 'top': config.scene.workspace_top,
-                        'resolution': config.perception.heightmap_resolution},
-          'cameras': cams}
+  """The simulator's calibration (`cameras.calibration`) with its workspace placed in a base
+  frame by `base_from_workspace` (4x4, turned by `yaw_deg`), depth in millimetres."""
+  data = cameras.calibration(env)
+  for cam in data['cameras']:
+    cam['camera_to_base'] = (base_from_workspace @ np.asarray(cam['camera_to_base'])).tolist()
+    cam['depth_scale'] = 0.001
+  data['workspace'].update(center=base_from_workspace[:3, 3].tolist(), yaw_deg=yaw_deg)
+  return data
 
 
 def test_heightmaps_from_16_bit_png_depth_match_training(scenes, tmp_path):
@@ -151,3 +133,16 @@ def test_change_between_frames_is_observed_as_training_observes_it(scenes, onnx,
   cal = calibration_from_dict(calibration(env))
   first, second = (png_heightmaps(images, b, cal, tmp_path) for b in (0, 1))
   assert onnx.changed(first[1:], second[1:]) and not onnx.changed(first[1:], first[1:])
+
+
+def test_the_robot_loop_example_runs_against_the_simulator(onnx):
+  """examples/robot_loop.py with the simulated rig: five rounds of capture, act, execute and
+  change observation; the policy picks objects off the table."""
+  spec = importlib.util.spec_from_file_location('robot_loop', ROOT / 'examples' / 'robot_loop.py')
+  example = importlib.util.module_from_spec(spec)
+  spec.loader.exec_module(example)
+  rig = example.SimulatedRig(onnx.model, seed=3)
+  before = rig.objects()
+  records = example.run(rig, onnx, calibration_from_dict(rig.calibration), 5, say=lambda _: None)
+  assert len(records) == 5 and all('primitive' in r for r in records)
+  assert rig.objects() < before and any(r['changed'] for r in records)
