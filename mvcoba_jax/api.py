@@ -366,6 +366,16 @@ def block_tables(given, suites: list[str]) -> dict[str, str]:
   return tables
 
 
+def check_blocks(tables: dict[str, str], files_of: dict[str, list]) -> None:
+  """Refuses a block table for suites with no VPG-format (.txt) case: it would change nothing."""
+  for suite in tables:
+    names = [suite] if suite else list(files_of)
+    if not any(pathlib.Path(f).suffix == '.txt' for n in names for f in files_of[n]):
+      where = f'suite {suite[:60]} has none' if suite else 'no evaluated suite has one'
+      raise EvaluationError(f'--blocks {suite + "=" if suite else ""}{tables[suite]}: block '
+                            f'tables name the shapes of VPG-format (.txt) cases; {where}')
+
+
 def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, runs: int = 5,
              max_actions: int = 60, seed: int = 0, protocol: str = 'frozen',
              config: str | None = None, overrides=(), blocks=(), allow_bad_cases: bool = False,
@@ -428,6 +438,7 @@ def evaluate(checkpoints=(), suites=('all',), *, baseline: str | None = None, ru
     base = config_lib.resolve(config, overrides)
     bounds = base.scene.workspace_half, base.scene.workspace_top
     tables = block_tables(blocks, list(files_of))
+    check_blocks(tables, files_of)
     table_of = {name: tables.get(name, tables.get('', 'vpg')) for name in files_of}
     cases_of = {name: [read_case(f, *bounds, blocks=table_of[name]) for f in files]
                 for name, files in files_of.items()}

@@ -112,6 +112,12 @@ def test_block_tables_name_a_suite_evaluated_and_a_known_table(tmp_path, capsys,
   assert says in capsys.readouterr().err
 
 
+def test_a_block_table_for_a_suite_of_our_case_files_is_refused(tmp_path, capsys):
+  assert eval_cli.main(['--baseline', 'heuristic', '--suite', 'ordered', '--config', 'tiny',
+                        '--out', str(tmp_path / 'o'), '--blocks', 'mvcoba']) == 2
+  assert 'VPG-format (.txt) cases; no evaluated suite has one' in capsys.readouterr().err
+
+
 def test_a_long_error_is_cut_to_short_lines(capsys):
   from mvcoba_jax.cli import fail
   assert fail('x' * 100_000 + '\n' + 'y\n' * 50) == 2
