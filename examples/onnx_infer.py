@@ -7,8 +7,9 @@ DIR is the output of `mvcoba-export`. state.npz holds `color` (V, R, R, 3) RGB i
 says whether the previous action changed the scene (1 before the first action), which the
 change-observation rule of MV-COBA needs. Prints the action as one line of JSON.
 
-Only the action rule and pixel -> world run here; the ONNX graph does the rest, rotations
-included (model.json, 'onnx').
+Only the action rule (`mvcoba_jax.deploy`'s, numpy alone) and pixel -> world run here; the ONNX
+graph does the rest, rotations included (model.json, 'onnx'). For depth images of calibrated
+cameras and an action in a robot's frame, see `mvcoba_jax.deploy` and examples/robot_loop.py.
 """
 from __future__ import annotations
 
@@ -20,23 +21,14 @@ import sys
 import numpy as np
 import onnxruntime as ort
 
+from mvcoba_jax.deploy import policy as deploy_policy
+
 
 def choose(q: np.ndarray, changed: bool, model: dict) -> dict:
-  """The greedy action of `model['action_rule']` from its maps (2, K, R, R): the graph's
-  output named by action_rule['maps'] (Q maps, or a suppressing method's scores)."""
-  prims = model['primitives']
-  flat = q.reshape(q.shape[0], -1)
-  rule = model['action_rule']['name']
-  if rule == 'change':
-    primitive = prims['grasp'] if changed else prims['push']
-  elif rule == 'max_q':
-    primitive = int(np.argmax(flat.max(axis=1)))  # first maximum: push on a tie
-  else:
-    primitive = prims['grasp']
-  index = int(np.argmax(flat[primitive]))
-  rotation, row, col = (int(i) for i in np.unravel_index(index, q.shape[1:]))
-  return {'primitive': primitive, 'rotation': rotation, 'row': row, 'col': col,
-          'value': float(flat[primitive, index])}
+  """The greedy action of `model['action_rule']` from its maps (2, K, R, R)
+  (`mvcoba_jax.deploy.policy.choose`, which needs no JAX)."""
+  primitive, rotation, row, col, value = deploy_policy.choose(q, changed, model)
+  return {'primitive': primitive, 'rotation': rotation, 'row': row, 'col': col, 'value': value}
 
 
 def to_world(action: dict, depth: np.ndarray, model: dict) -> dict:

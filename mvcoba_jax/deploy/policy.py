@@ -25,6 +25,24 @@ class Action:
   q: float
 
 
+def choose(q: np.ndarray, changed: bool, model: dict) -> tuple[int, int, int, int, float]:
+  """(primitive, rotation, row, col, score): the greedy action of `model['action_rule']`
+  (model.json) from its maps (2, K, R, R), the graph's output named by action_rule['maps'] (Q
+  maps, or a suppressing method's scores); `changed`: whether the last action changed the
+  scene."""
+  flat = q.reshape(q.shape[0], -1)
+  prims, rule = model['primitives'], model['action_rule']['name']
+  if rule == 'change':
+    primitive = prims['grasp'] if changed else prims['push']
+  elif rule == 'max_q':
+    primitive = int(np.argmax(flat.max(axis=1)))  # first maximum: push on a tie
+  else:
+    primitive = prims['grasp']
+  index = int(np.argmax(flat[primitive]))
+  rotation, row, col = (int(i) for i in np.unravel_index(index, q.shape[1:]))
+  return primitive, rotation, row, col, float(flat[primitive, index])
+
+
 class OnnxPolicy:
   """model.json and model.onnx of an export: the network's maps of a state and its method's
   greedy rule (model.json's `action_rule`), as `examples/onnx_infer.py` applies them."""
@@ -60,18 +78,7 @@ class OnnxPolicy:
     (maps,) = self.session.run([self.model['action_rule']['maps']],
                                {'color': np.asarray(color, np.float32)[None],
                                 'depth': np.asarray(depth, np.float32)[None]})
-    q = maps[0]
-    flat = q.reshape(q.shape[0], -1)
-    prims, rule = self.model['primitives'], self.model['action_rule']['name']
-    if rule == 'change':
-      primitive = prims['grasp'] if changed else prims['push']
-    elif rule == 'max_q':
-      primitive = int(np.argmax(flat.max(axis=1)))  # first maximum: push on a tie
-    else:
-      primitive = prims['grasp']
-    index = int(np.argmax(flat[primitive]))
-    rotation, row, col = (int(i) for i in np.unravel_index(index, q.shape[1:]))
-    return primitive, rotation, row, col, float(flat[primitive, index])
+    return choose(maps[0], changed, self.model)
 
   def act(self, color, depth, seen, changed: bool, calibration: Calibration) -> Action:
     """The greedy action in the robot's base frame, refused (DeployError, with the reason) from
