@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import pathlib
 import statistics
 
@@ -31,13 +30,6 @@ def training_minutes(log: pathlib.Path) -> dict[str, float]:
       variant = entry['what'][len('train-'):].rsplit('-s', 1)[0]
       times.setdefault(variant, []).append(entry['wall_s'] / 60)
   return {v: statistics.median(t) for v, t in times.items()}
-
-
-def cell(entry) -> str:
-  if entry is None:
-    return '-'
-  point, low, high = entry
-  return f'{point:.1f}' if math.isnan(low) else f'{point:.1f} [{low:.1f}, {high:.1f}]'
 
 
 def by_suite_name(folders: list[str]) -> dict:
@@ -68,7 +60,7 @@ def table(work: pathlib.Path, metrics=METRICS) -> str:
     for suite in suites:  # a suite a variant was not evaluated on reads '-'
       over = report.seed_intervals(by_suite.get(suite, {}), minimum=1)
       entry = next(iter(over.values()), {})
-      cells += [cell(entry.get(m)) for m in metrics]
+      cells += [report.interval_cell(entry.get(m)) for m in metrics]
     seeds = len(evaluations[variant])
     took = f'{minutes[variant]:.1f}' if variant in minutes else '-'
     lines.append(f'| {variant} | {seeds} | ' + ' | '.join(cells) + f' | {took} |')

@@ -69,9 +69,7 @@ def comparison(suite: str, ours: dict[str, dict]) -> str:
     name = PAPER_NAMES.get(report.method_of(method), method)
     cells = []
     for key, paper_key, _ in COLUMNS:
-      value = entry.get(key)
-      ci = '-' if value is None else (f'{value[0]:.1f}' if math.isnan(value[1]) else
-                                      f'{value[0]:.1f} [{value[1]:.1f}, {value[2]:.1f}]')
+      ci = report.interval_cell(entry.get(key))
       theirs = paper.get(name, {}).get(paper_key)
       cells += [ci, '-' if theirs is None else f'{theirs:.1f}']
     cells.append(report.per_seed_cell(entry['per_seed']['grasp_success']))

@@ -170,6 +170,15 @@ def seed_intervals(rows: dict[str, dict], minimum: int = 2) -> dict[str, dict]:
   return out
 
 
+def interval_cell(value) -> str:
+  """`mean [low, high]` of an interval (the mean alone where one seed gives none; '-' where
+  undefined)."""
+  if value is None:
+    return '-'
+  return f'{value[0]:.1f}' if math.isnan(value[1]) else \
+      f'{value[0]:.1f} [{value[1]:.1f}, {value[2]:.1f}]'
+
+
 def per_seed_cell(values) -> str:
   """Each seed's mean, in seed order ('-' where undefined)."""
   return '-' if values is None else ' / '.join(f'{v:.1f}' for v in values)
@@ -178,9 +187,7 @@ def per_seed_cell(values) -> str:
 def interval_table(over_seeds: dict[str, dict]) -> str:
   head = ('| method | seeds | ' + ' | '.join(label for _, label in METRICS)
           + ' | grasp success per seed |\n|---|---|' + '---|' * (len(METRICS) + 1))
-  cell = lambda v: '-' if v is None else (f'{v[0]:.1f}' if math.isnan(v[1]) else
-                                          f'{v[0]:.1f} [{v[1]:.1f}, {v[2]:.1f}]')
-  return '\n'.join([head] + [f'| {m} | {e["seeds"]} | ' + ' | '.join(cell(e[k]) for k, _ in METRICS)
+  return '\n'.join([head] + [f'| {m} | {e["seeds"]} | ' + ' | '.join(interval_cell(e[k]) for k, _ in METRICS)
                              + f' | {per_seed_cell(e["per_seed"]["grasp_success"])} |'
                              for m, e in over_seeds.items()])
 
@@ -244,6 +251,18 @@ def write_whole(path: pathlib.Path, content: str) -> None:
                        ) from None
 
 
+def read_results(path: pathlib.Path, purpose: str = '') -> dict:
+  """An evaluation's results.json (suite -> row -> result), or ResultsError naming the file."""
+  try:
+    data = json.loads(path.read_text())
+  except (OSError, ValueError, RecursionError) as e:
+    raise ResultsError(f'{path}: cannot read evaluation results{purpose} '
+                       f'({type(e).__name__}: {str(e)[:120]})') from None
+  if not isinstance(data, dict) or not all(isinstance(rows, dict) for rows in data.values()):
+    raise ResultsError(f'{path}: not the results of mvcoba-eval (suite -> method -> results)')
+  return data
+
+
 def kept_rows(out: pathlib.Path, settings: dict[tuple[str, str], dict]) -> tuple[dict, list]:
   """(the rows of `out`/results.json that a resumed evaluation keeps, as a report; the (suite,
   row) of those this invocation does not evaluate): every row evaluated with the `settings` of
@@ -252,13 +271,7 @@ def kept_rows(out: pathlib.Path, settings: dict[tuple[str, str], dict]) -> tuple
   path = out / 'results.json'
   if not path.exists():
     return {}, []
-  try:
-    data = json.loads(path.read_text())
-  except (OSError, ValueError, RecursionError) as e:
-    raise ResultsError(f'{path}: cannot read evaluation results to resume '
-                       f'({type(e).__name__}: {str(e)[:120]})') from None
-  if not isinstance(data, dict) or not all(isinstance(rows, dict) for rows in data.values()):
-    raise ResultsError(f'{path}: not the results of mvcoba-eval (suite -> method -> results)')
+  data = read_results(path, ' to resume')
   report, others = {}, []
   for suite, rows in data.items():
     for label, row in rows.items():
@@ -293,13 +306,7 @@ def joined_report(folders: list[str]) -> dict:
   report = {}
   for folder, name in zip(folders, distinct_names(folders)):
     path = pathlib.Path(folder) / 'results.json'
-    try:
-      data = json.loads(path.read_text())
-    except (OSError, ValueError, RecursionError) as e:
-      raise ResultsError(f'{path}: cannot read evaluation results '
-                         f'({type(e).__name__}: {str(e)[:120]})') from None
-    if not isinstance(data, dict) or not all(isinstance(rows, dict) for rows in data.values()):
-      raise ResultsError(f'{path}: not the results of mvcoba-eval (suite -> method -> results)')
+    data = read_results(path)
     for suite, rows in data.items():
       for method, result in rows.items():
         rows_here = report.setdefault(suite, {})

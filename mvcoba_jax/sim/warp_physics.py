@@ -40,14 +40,17 @@ def batched(fn):
   them only): under any number of vmaps `fn` is called once, on every example flattened into one
   leading axis; unbatched arguments are broadcast. Called on one example, it is a batch of one."""
 
+  def broadcast(axis_size, in_batched, args):
+    return [a if b else jnp.broadcast_to(a, (axis_size,) + a.shape)
+            for a, b in zip(args, in_batched)]
+
   @jax.custom_batching.custom_vmap
   def many(*args):
     return fn(*args)
 
   @many.def_vmap
   def many_rule(axis_size, in_batched, *args):  # a vmap over batches: one larger batch
-    args = [a if b else jnp.broadcast_to(a, (axis_size,) + a.shape)
-            for a, b in zip(args, in_batched)]
+    args = broadcast(axis_size, in_batched, args)
     out = many(*(a.reshape((-1,) + a.shape[2:]) for a in args))
     out = jax.tree.map(lambda x: x.reshape((axis_size, -1) + x.shape[1:]), out)
     return out, jax.tree.map(lambda _: True, out)
@@ -58,8 +61,7 @@ def batched(fn):
 
   @one.def_vmap
   def one_rule(axis_size, in_batched, *args):
-    args = [a if b else jnp.broadcast_to(a, (axis_size,) + a.shape)
-            for a, b in zip(args, in_batched)]
+    args = broadcast(axis_size, in_batched, args)
     out = many(*args)
     return out, jax.tree.map(lambda _: True, out)
 
