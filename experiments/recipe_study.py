@@ -72,14 +72,15 @@ VARIANTS = {
     'preset_paper_text': ['--config', 'paper_text'],
     'preset_authors': ['--config', 'authors'],
     'preset_default': ['--config', 'default', '--set', 'train.total_actions=3000'],
-    # The default preset (6000 actions) at more tabletops in lockstep, with and without the
-    # replay ratio kept (`train.replay_ratio=1`: the default's 8 sampled per 8 new transitions).
-    'batch_8_ratio': ['--config', 'default', '--set', 'train.replay_ratio=1'],
-    'batch_32_ratio': ['--config', 'default', '--set', 'num_envs=32',
-                       '--set', 'train.replay_ratio=1'],
-    'batch_64_ratio': ['--config', 'default', '--set', 'num_envs=64',
-                       '--set', 'train.replay_ratio=1'],
-    'batch_64': ['--config', 'default', '--set', 'num_envs=64'],
+    # The reproduction's preset_default (3000 actions, 8 tabletops, one update per lockstep
+    # action) at more tabletops in lockstep, with and without the replay ratio kept
+    # (`train.replay_ratio=1`: 8 sampled per 8 new transitions, as preset_default's B=8).
+    'batch_32_ratio': ['--config', 'default', '--set', 'train.total_actions=3000',
+                       '--set', 'num_envs=32', '--set', 'train.replay_ratio=1'],
+    'batch_64_ratio': ['--config', 'default', '--set', 'train.total_actions=3000',
+                       '--set', 'num_envs=64', '--set', 'train.replay_ratio=1'],
+    'batch_64': ['--config', 'default', '--set', 'train.total_actions=3000',
+                 '--set', 'num_envs=64'],
 }
 # variant -> the variant whose finished run it resumes to more actions. The same as training
 # that long in one go: nothing in the recipe reads the total (constant learning rate, exploration
