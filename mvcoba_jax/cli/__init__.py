@@ -1,7 +1,9 @@
 """Command-line entry points (`mvcoba-train`, `mvcoba-eval`, `mvcoba-export`, `mvcoba-viz`,
-`mvcoba-demo`, `mvcoba-reproduce`): argument parsing and process set-up around the library."""
+`mvcoba-demo`, `mvcoba-reproduce`): argument parsing and process set-up around the library.
+They need the `train` extra; an install for deployment only (`.[deploy]`) is told so in one line."""
 from __future__ import annotations
 
+import importlib.util
 import sys
 
 LINE_LIMIT = 300  # characters of one line of an error message
@@ -18,3 +20,10 @@ def fail(error) -> int:
     shown.append(f'  ... and {len(lines) - LINES_LIMIT} more lines')
   print('error: ' + '\n'.join(shown), file=sys.stderr)
   return 2
+
+
+TRAINING = ('jax', 'mujoco', 'flax', 'optax', 'orbax', 'scipy', 'tqdm')  # the train extra's
+_missing = [name for name in TRAINING if importlib.util.find_spec(name) is None]
+if _missing:
+  sys.exit(fail(f"the commands need the train extra (missing {', '.join(_missing)}): "
+                "pip install 'mvcoba-jax[train]'"))

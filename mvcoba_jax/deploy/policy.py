@@ -49,7 +49,7 @@ class OnnxPolicy:
 
   def __init__(self, folder):
     import onnxruntime as ort  # noqa: PLC0415 (only a policy needs it, not the heightmaps)
-    folder = pathlib.Path(folder)
+    self.folder = folder = pathlib.Path(folder)
     try:
       self.model = json.loads((folder / 'model.json').read_text())
       onnx_file = folder / self.model['onnx']['file']

@@ -2,8 +2,12 @@
 render, written as 16-bit PNG files in millimetres with their true intrinsics and poses, give
 the heightmaps training builds of the same scenes, in any base frame the calibration names."""
 import importlib.util
+import json
 import math
 import pathlib
+import shutil
+import subprocess
+import sys
 
 import cv2
 import jax
@@ -146,3 +150,51 @@ def test_the_robot_loop_example_runs_against_the_simulator(onnx):
   records = example.run(rig, onnx, calibration_from_dict(rig.calibration), 5, say=lambda _: None)
   assert len(records) == 5 and all('primitive' in r for r in records)
   assert rig.objects() < before and any(r['changed'] for r in records)
+
+
+def test_the_deploy_extra_alone_turns_camera_files_into_the_same_action(scenes, onnx, tmp_path):
+  """In a fresh virtualenv holding only `pip install '.[deploy]'` (numpy, OpenCV, onnxruntime:
+  no JAX, no MuJoCo), examples/camera_action.py turns a scene's 16-bit PNG depth and colour files
+  and their calibration into the action this process's deploy path takes, and a command of the
+  package says in one line that it needs the train extra."""
+  env, _, images, _ = scenes
+  cal_file = tmp_path / 'calibration.json'
+  cal_file.write_text(json.dumps(calibration(env)))
+  cal = calibration_from_dict(calibration(env))
+  depth_files, color_files = [], []
+  for v, image in enumerate(images):
+    depth_files.append(tmp_path / f'depth{v}.png')
+    cv2.imwrite(str(depth_files[-1]), np.round(np.asarray(image.depth[2]) * 1000).astype(np.uint16))
+    color_files.append(tmp_path / f'color{v}.png')
+    rgb = np.round(np.asarray(image.rgb[2]) * 255).astype(np.uint8)
+    cv2.imwrite(str(color_files[-1]), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+  colors = [cv2.cvtColor(cv2.imread(str(f)), cv2.COLOR_BGR2RGB) for f in color_files]
+  want = onnx.act(*heightmaps([read_depth(f, c) for f, c in zip(depth_files, cal.cameras)], cal,
+                              colors), False, cal)
+
+  source = tmp_path / 'source'  # the project's files a wheel is built from, not the work tree
+  shutil.copytree(ROOT / 'mvcoba_jax', source / 'mvcoba_jax',
+                  ignore=shutil.ignore_patterns('__pycache__'))
+  for name in ('pyproject.toml', 'README.md', 'LICENSE'):
+    shutil.copy(ROOT / name, source / name)
+  venv = tmp_path / 'venv'
+  subprocess.run([sys.executable, '-m', 'venv', str(venv)], check=True)
+  python = str(venv / 'bin' / 'python')
+  installed = subprocess.run([python, '-m', 'pip', 'install', '-q', f'{source}[deploy]'],
+                             capture_output=True, text=True, timeout=900)
+  assert installed.returncode == 0, installed.stderr[-2000:]
+  for name in ('jax', 'mujoco', 'flax'):
+    assert subprocess.run([python, '-c', f'import {name}'], capture_output=True).returncode != 0
+  out = subprocess.run(
+      [python, str(ROOT / 'examples' / 'camera_action.py'), '--calibration', str(cal_file),
+       '--model', str(onnx.folder), '--depth', *map(str, depth_files),
+       '--color', *map(str, color_files), '--changed', '0'],
+      capture_output=True, text=True, timeout=300, cwd=tmp_path)
+  assert out.returncode == 0, out.stderr[-2000:]
+  got = json.loads(out.stdout)
+  assert (got['primitive'], got['rotation'], got['row'], got['col']) == (
+      want.primitive, want.rotation, want.row, want.col)
+  np.testing.assert_allclose(got['position'], want.position, atol=1e-9)
+  refused = subprocess.run([str(venv / 'bin' / 'mvcoba-train')], capture_output=True, text=True)
+  assert refused.returncode == 2 and refused.stderr.count('\n') == 1, refused.stderr
+  assert "pip install 'mvcoba-jax[train]'" in refused.stderr
