@@ -30,7 +30,8 @@ from mvcoba_jax import runtime  # noqa: E402
 from mvcoba_jax.evaluation import runner  # noqa: E402
 from mvcoba_jax.config import resolve  # noqa: E402
 from mvcoba_jax.learner import task  # noqa: E402
-from mvcoba_jax.policy import load  # noqa: E402
+from mvcoba_jax.evaluation.protocols import FROZEN  # noqa: E402
+from mvcoba_jax.evaluation.sources import trained  # noqa: E402
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
 from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 from mvcoba_jax.suites import suite_files  # noqa: E402
@@ -69,9 +70,9 @@ def step_cost(suite: str, repeats: int) -> dict:
 def whole_suite(suite: str, checkpoint: str, runs: int) -> dict:
   """Wall time of a suite's evaluation kept in one batch, and moving to smaller batches."""
   cases = [read_case(f) for f in suite_files([suite])[suite]]
-  source = load(checkpoint)
-  env = Tabletop(suite_cases.suite_config(source[0], suite_cases.pool_for(cases)))
-  policy, views = runner.make_policy(source, env.config)
+  source = trained(checkpoint)
+  env = Tabletop(suite_cases.suite_config(source.config, suite_cases.pool_for(cases)))
+  policy, views = source.policy(env.config, FROZEN)
   layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
   keys = jax.random.split(jax.random.PRNGKey(0), len(cases) * runs)
   n = len(cases) * runs

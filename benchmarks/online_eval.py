@@ -22,7 +22,8 @@ from physics import settings  # noqa: E402
 from mvcoba_jax import runtime  # noqa: E402
 from mvcoba_jax.evaluation import runner  # noqa: E402
 from mvcoba_jax.evaluation.metrics import case_metrics  # noqa: E402
-from mvcoba_jax.policy import load  # noqa: E402
+from mvcoba_jax.evaluation.protocols import PROTOCOLS  # noqa: E402
+from mvcoba_jax.evaluation.sources import trained  # noqa: E402
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
 from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 from mvcoba_jax.suites import suite_files  # noqa: E402
@@ -31,12 +32,12 @@ from mvcoba_jax.suites import cases as suite_cases  # noqa: E402
 
 def suite_costs(suite: str, source, runs: int) -> dict:
   cases = [read_case(f) for f in suite_files([suite])[suite]]
-  env = Tabletop(suite_cases.suite_config(source[0], suite_cases.pool_for(cases)))
+  env = Tabletop(suite_cases.suite_config(source.config, suite_cases.pool_for(cases)))
   layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
   keys = jax.random.split(jax.random.PRNGKey(0), len(cases) * runs)
   row = {'suite': suite, 'runs': len(cases) * runs}
   for protocol in ('frozen', 'online'):
-    policy, views = runner.make_policy(source, env.config, online=protocol == 'online')
+    policy, views = source.policy(env.config, PROTOCOLS[protocol])
     for timing in ('first_s', 'warm_s'):
       start = time.perf_counter()
       logs = runner.run_logs(runner.evaluate(env, policy, views, layouts, keys, 60))
@@ -58,7 +59,7 @@ def main():
   parser.add_argument('--runs', type=int, default=5, help='runs per case')
   args = parser.parse_args()
   runtime.setup()
-  source = load(args.checkpoint)
+  source = trained(args.checkpoint)
   rows = [suite_costs(s, source, args.runs) for s in args.suite]
   json.dump({'benchmark': 'online_eval', 'settings': settings() | {
       'checkpoint': args.checkpoint, 'runs': args.runs, 'max_actions': 60}, 'results': rows},

@@ -168,6 +168,7 @@ class Config:
     return 1 if ratio == 0 else max(1, round(ratio * self.num_envs / self.train.batch_size))
 
 
+MAX_ACTIONS_LIMIT = 10_000  # actions of one evaluation run or greedy check: counters and traces grow with it
 REPLAY_LIMIT_BYTES = 16 * 2 ** 30  # a replay above this is refused: no CPU here holds it twice
 ACTIVATION_LIMIT_BYTES = 32 * 2 ** 30  # rough size of one acting forward's feature maps
 DENSENET_GROWTH = 32  # channels each DenseNet layer adds: GroupNorm's groups must divide it

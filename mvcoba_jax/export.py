@@ -50,7 +50,7 @@ def onnx_model(config: Config, model: networks.QNetwork):
 
   graphdef, params = nnx.split(model)
   side, views = perception.grid_size(config), len(config.scene.cameras)
-  method = methods.get(config.network.method)
+  method = model.method
   outputs = output_names(method)
 
   def forward(color, depth):

@@ -19,7 +19,6 @@ from flax import nnx
 from mvcoba_jax import arguments
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Config, Error
-from mvcoba_jax import methods
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.learner.checkpoint import CheckpointError, Checkpoints, incompatibilities
@@ -64,7 +63,7 @@ class Policy(typing.NamedTuple):
     """The greedy action on one observation (`q_maps`' arguments): the method's rule picks the
     primitive (MV-COBA's: grasp when the last action changed the scene, `changed`, else push;
     model.json's `action_rule` says each method's) and the argmax rotation and cell of its map."""
-    method = methods.get(self.config.network.method)
+    method = self.network.method
     depth = jnp.asarray(depth, jnp.float32)[None]
     maps = agent.rule_maps(jnp.asarray(self.q_maps(color, depth[0]))[None], depth, method,
                            self.config)

@@ -19,6 +19,7 @@ from mvcoba_jax import api, arguments, folders
 from mvcoba_jax import methods as methods_lib
 from mvcoba_jax.config import Config, ConfigError, validate
 from mvcoba_jax.evaluation import paper
+from mvcoba_jax.evaluation.protocols import PROTOCOLS as PROTOCOLS_BY_NAME
 from mvcoba_jax.evaluation.report import write_whole
 from mvcoba_jax.learner.checkpoint import holds_checkpoint
 from mvcoba_jax.learner.run_log import plot_sweep
@@ -28,14 +29,8 @@ from mvcoba_jax.suites import suite_files
 # Rough speeds on a 2-core CPU, native backend, default preset (docs/results/reproduction.md:
 # 54144 actions in 88 min, 1350 case runs in 55 min): what the expected wall time is computed from.
 TRAIN_ACTIONS_PER_S = 10.0
-ONLINE_COST = 2.3  # online over frozen evaluation time: 1.9-2.7 (benchmarks/online_eval.py)
-EVAL_S_PER_CASE_RUN = {'frozen': 2.5, 'online': 2.5 * ONLINE_COST}
-
-PROTOCOLS = {
-    'frozen': 'the trained network, frozen, acts greedily in every run',
-    'online': 'every run starts from the trained network and takes one SGD step after each of '
-              'its actions (VPG\'s and the MV-COBA authors\' test protocol)',
-}
+FROZEN_S_PER_CASE_RUN = 2.5  # each protocol's `cost` times this
+PROTOCOLS = ('frozen', 'online')  # the paper's two: `evaluation.protocols.PROTOCOLS` names them
 
 
 # method -> the preset it trains with in the reproduction: the one it validated best with in the
@@ -69,13 +64,14 @@ def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
   runs, max_actions = (arguments.count(call, n, v, -2 ** 63, 2 ** 63)
                        for n, v in (('runs', runs), ('max_actions', max_actions)))
   suites = arguments.names(call, 'suites', suites)
-  protocols = arguments.names(call, 'protocols', protocols, tuple(PROTOCOLS))
+  protocols = [PROTOCOLS_BY_NAME[p] for p in arguments.names(call, 'protocols', protocols,
+                                                              PROTOCOLS)]
   workdir, out = arguments.path(call, 'workdir', workdir), arguments.path(call, 'out', out)
   say = print if arguments.flag(call, 'progress', progress) else (lambda *a, **k: None)
   try:  # what the evaluation would refuse, refused before the sweep trains
     files = suite_files(list(suites))
     api.check_work(runs, max_actions, files)
-    for folder in [workdir, *(protocol_folder(out, p) for p in protocols)]:
+    for folder in [workdir, *(p.folder(out) for p in protocols)]:
       folders.check(folder, keep=True)
   except (folders.FolderError, ScenarioError) as e:
     raise api.EvaluationError(str(e)) from None
@@ -88,7 +84,7 @@ def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
   trainings = len(methods) * len(seeds)
   cases = sum(len(f) for f in files.values())
   expected = (trainings * actions / TRAIN_ACTIONS_PER_S
-              + sum(EVAL_S_PER_CASE_RUN[p] for p in protocols) * trainings * cases * runs)
+              + sum(FROZEN_S_PER_CASE_RUN * p.cost for p in protocols) * trainings * cases * runs)
   say(f'{trainings} trainings of {actions} actions, then {trainings} policies x {cases} cases x '
       f'{runs} runs: expected about {expected / 60:.0f} min on a 2-core CPU', flush=True)
   start = time.perf_counter()
@@ -99,28 +95,23 @@ def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
   plot_sweep(dirs, config.train.curve_window, workdir)
   reports, eval_s = {}, 0.0
   for protocol in protocols:
-    reports[protocol] = api.evaluate(dirs, suites, runs=runs, max_actions=max_actions,
-                                     protocol=protocol, out=protocol_folder(out, protocol),
-                                     resume=True, progress=progress)
-    eval_s += evaluation_seconds(reports[protocol])
+    reports[protocol.name] = api.evaluate(dirs, suites, runs=runs, max_actions=max_actions,
+                                          protocol=protocol, out=protocol.folder(out),
+                                          resume=True, progress=progress)
+    eval_s += evaluation_seconds(reports[protocol.name])
   train_s = training_seconds(dirs)
   timing = (f'Expected wall time {expected / 60:.0f} min; spent {(train_s + eval_s) / 60:.0f} min '
             f'({train_s / 60:.0f} training, {eval_s / 60:.0f} evaluating: the sums of the '
             f'runs\' logged times, over every invocation); this invocation '
             f'{(time.perf_counter() - start) / 60:.0f} min.')
-  texts = {p: f'Test protocol: {PROTOCOLS[p]}.\n\n{paper.comparisons(r)}'
-           for p, r in reports.items()}
+  texts = {p: f'Test protocol: {p.description}.\n\n{paper.comparisons(reports[p.name])}'
+           for p in protocols}
   for protocol, text in texts.items():
-    write_whole(protocol_folder(out, protocol) / 'comparison.md', f'{text}\n\n{timing}\n')
+    write_whole(protocol.folder(out) / 'comparison.md', f'{text}\n\n{timing}\n')
   curves = [pathlib.Path(shutil.copy(p, out)).name for p in sorted(workdir.glob('curves-*.png'))]
   say('\n' + '\n\n'.join(texts.values()) + f'\n\n{timing}\nwrote comparison.md of each '
       f'protocol under {out} and the sweep\'s training curves ({", ".join(curves)})')
   return reports
-
-
-def protocol_folder(out: pathlib.Path, protocol: str) -> pathlib.Path:
-  """Where a protocol's tables go: `out` itself for the frozen one, OUT/online for online."""
-  return out if protocol == 'frozen' else out / protocol
 
 
 def training_seconds(workdirs) -> float:

@@ -28,6 +28,7 @@ import sys
 from mvcoba_jax import api, video
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.cli import fail
+from mvcoba_jax.evaluation.sources import BASELINES
 from mvcoba_jax.sim.scenarios import FIT_BOUND, MAX_FIT_BOUND
 from mvcoba_jax.suites import SUITES
 
@@ -38,7 +39,7 @@ def build_parser() -> argparse.ArgumentParser:
   parser.add_argument('--checkpoint', '--compare', nargs='+', default=[],
                       help='work directories of mvcoba-train runs, or folders written by '
                            'mvcoba-export (e.g. pretrained/mvcoba)')
-  parser.add_argument('--baseline', choices=api.BASELINES,
+  parser.add_argument('--baseline', choices=BASELINES,
                       help='a policy that needs no checkpoint')
   parser.add_argument('--tables', nargs='+', default=[], metavar='EVAL_DIR',
                       help='--out folders of earlier evaluations: print and write their joined '

@@ -13,6 +13,7 @@ import numpy as np
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Error
 from mvcoba_jax.evaluation import intervals, metrics
+from mvcoba_jax.evaluation.protocols import labelled
 
 METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action efficiency (%)'),
            ('completion', 'completion (%)'), ('objects_picked', 'objects picked (%)'),
@@ -125,8 +126,8 @@ def training_groups(rows: dict[str, dict]) -> dict[str, list[str]]:
     settings = result.get('settings') if isinstance(result.get('settings'), dict) else {}
     training = settings.get('training')
     key = json.dumps(as_trained(training), sort_keys=True) if isinstance(training, dict) else None
-    protocol = str(settings.get('protocol', 'frozen'))[:20]
-    method = method_of(label) + (f' [{protocol}]' if protocol != 'frozen' else '')
+    protocol = settings.get('protocol')
+    method = labelled(method_of(label), None if protocol is None else str(protocol)[:20])
     seen = seeds.setdefault((method, key), [])
     again = seen.count(settings.get('training_seed')) if key is not None else 0
     seen.append(settings.get('training_seed'))

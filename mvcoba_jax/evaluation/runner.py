@@ -17,7 +17,6 @@ from typing import Any, Callable
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optax
 from flax import nnx, struct
 
 from mvcoba_jax import methods, perception
@@ -99,7 +98,7 @@ class OnlinePolicy:
   def __init__(self, model: networks.QNetwork, config: Config):
     self.graphdef, self.params = nnx.split(model)
     self.config = config
-    self.method = methods.get(config.network.method)
+    self.method = model.method
     self.views = self.method.views
     self.optimizer = agent.optimizer(config.train)
 
@@ -139,13 +138,11 @@ class OnlinePolicy:
                         pending.reward, t)
 
     def step(params, opt_state, transition, y):
-      one = jax.tree.map(lambda x: x[None], transition)
-      (loss, _), grads = jax.value_and_grad(agent.executed_loss, argnums=1, has_aux=True)(
-          self.q_maps, params, one, y[None], jnp.ones(1, bool), self.config)
-      updates, opt_state = self.optimizer.update(grads, opt_state, params)
-      params = optax.apply_updates(params, updates)
-      sound = jnp.isfinite(loss) & jnp.all(jnp.stack(
-          [jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves(params)]))
+      loss = lambda p, one, y: agent.executed_loss(self.q_maps, p, one, y, jnp.ones(1, bool),
+                                                   self.config)
+      params, opt_state, _, _, sound = agent.sgd_step(
+          loss, self.optimizer, params, opt_state, jax.tree.map(lambda x: x[None], transition),
+          y[None])
       return params, opt_state, sound
 
     params, opt_state, sound = jax.vmap(step)(learner.params, learner.opt_state, pending, y)
@@ -416,24 +413,3 @@ def heuristic_policy(num_rotations: int) -> Policy:
                              rotation=rotation.astype(jnp.int32), row=row.astype(jnp.int32),
                              col=col.astype(jnp.int32))
   return policy
-
-
-def source_name(method_source) -> str:
-  """The table row of a checkpoint's (config, model, step) or of a baseline's name."""
-  if isinstance(method_source, str):
-    return f'baseline:{method_source}'
-  return method_source[0].network.method
-
-
-def make_policy(method_source, config, online: bool = False, no_repeat: bool = False):
-  """(policy, views) of a checkpoint or a baseline; with `online`, a checkpoint's
-  `OnlinePolicy`; with `no_repeat`, its greedy policy that never repeats a failed action."""
-  if isinstance(method_source, str):  # a baseline
-    return heuristic_policy(config.env.num_rotations), (0, 1)
-  config, model, _ = method_source
-  if online:
-    return OnlinePolicy(model, config), methods.get(config.network.method).views
-  graphdef, params = nnx.split(model)
-  method = methods.get(config.network.method)
-  q_maps = lambda obs: nnx.merge(graphdef, params)(obs.color, obs.depth)
-  return greedy_policy(q_maps, method, config, no_repeat), method.views

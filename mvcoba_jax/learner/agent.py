@@ -134,6 +134,17 @@ def optimizer(train: TrainConfig) -> optax.GradientTransformation:
                      optax.sgd(train.learning_rate, momentum=train.momentum))
 
 
+def sgd_step(loss, optimizer: optax.GradientTransformation, params, opt_state, *args):
+  """One SGD step on `loss(params, *args) -> (value, aux)`, the one update of training and of
+  online evaluation: the new parameters and optimiser state, the loss and its aux, and whether
+  the loss and the new parameters are finite (both keep the old ones where not)."""
+  (value, aux), grads = jax.value_and_grad(loss, has_aux=True)(params, *args)
+  updates, opt_state = optimizer.update(grads, opt_state, params)
+  params = optax.apply_updates(params, updates)
+  finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves(params)]))
+  return params, opt_state, value, aux, jnp.isfinite(value) & finite
+
+
 def quarter_turned(batch, turns, num_rotations: int):
   """`batch` (transitions with obs, next_obs, rotation, row, col) with each transition's states
   turned by `turns` (B,) quarter turns about the heightmap centre, each a quarter turn as

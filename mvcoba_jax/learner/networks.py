@@ -232,6 +232,7 @@ class QNetwork(nnx.Module):
     stride = 32 if config.trunk == 'densenet121' else config.stem_patch
     self.pad_stride = stride if config.pad_to_diagonal else 0
     self.shared_stages = config.shared_stages
+    self.method = method  # its rule, views and primitives: what acts on these maps
     self.views = method.views
     self.fuse = method.fuse
     self.streams = (0,) if self.fuse else self.views  # the inputs each FCN reads, by view

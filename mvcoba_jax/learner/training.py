@@ -10,7 +10,6 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
-import optax
 from flax import nnx, struct
 from jax.sharding import Mesh, PartitionSpec
 
@@ -55,10 +54,6 @@ class StepLog:
   loss: jnp.ndarray  # scalar: the update's loss (0 when no update ran)
   epsilon: jnp.ndarray  # scalar
   explored: jnp.ndarray  # a random action, not the policy's
-
-
-def _all_finite(tree):
-  return jnp.all(jnp.stack([jnp.all(jnp.isfinite(x)) for x in jax.tree.leaves(tree)]))
 
 
 class Trainer:
@@ -163,12 +158,10 @@ class Trainer:
       batch = jax.tree.map(lambda a, b: jnp.concatenate([a, b.astype(a.dtype)]), batch,
                            transitions)
       valid = jnp.concatenate([valid, jnp.broadcast_to(fresh_valid, transitions.reward.shape)])
-    (loss, td), grads = jax.value_and_grad(self.loss, has_aux=True)(
-        state.params, state.target_params, batch, valid)
+    params, opt_state, loss, td, sound = agent.sgd_step(
+        self.loss, self.optimizer, state.params, state.opt_state, state.target_params, batch,
+        valid)
     td = td[:t.batch_size]
-    updates, opt_state = self.optimizer.update(grads, state.opt_state, state.params)
-    params = optax.apply_updates(state.params, updates)
-    sound = jnp.isfinite(loss) & _all_finite(params)
     ok = enabled & sound
     keep = lambda new, old: jax.tree.map(lambda a, b: jnp.where(ok, a, b), new, old)
     params, opt_state = keep(params, state.params), keep(opt_state, state.opt_state)

@@ -10,6 +10,8 @@ import pytest
 
 from mvcoba_jax import methods, perception, video, viz
 from mvcoba_jax.evaluation import metrics, runner
+from mvcoba_jax.evaluation.protocols import ONLINE
+from mvcoba_jax.evaluation.sources import Source
 from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.config import resolve
 from mvcoba_jax.learner import agent
@@ -369,7 +371,7 @@ def online(setup):
   from mvcoba_jax.learner import networks
   _, env, _, layouts, keys, _ = setup
   model = networks.build_network(env.config.network, env.config.env.num_rotations, nnx.Rngs(0))
-  policy, views = runner.make_policy((env.config, model, 0), env.config, online=True)
+  policy, views = Source('mvcoba', env.config, model).policy(env.config, ONLINE)
   run = lambda l, k, cap: runner.evaluate(env, policy, views, l, k, cap)
   return policy, run, layouts, keys
 

@@ -344,14 +344,15 @@ def test_a_loaded_policy_acts_as_evaluation_does():
   greedy policy takes (the method's rule over the argmax rotation and cell), in both branches of
   MV-COBA's rule, with the cell's centre and surface height in the workspace frame."""
   from mvcoba_jax import perception
-  from mvcoba_jax.evaluation import runner
+  from mvcoba_jax.evaluation.protocols import FROZEN
+  from mvcoba_jax.evaluation.sources import Source
   loaded = policy.load(ROOT / 'pretrained' / 'mvcoba')
   config, model, step = loaded
   state = np.load(ROOT / 'pretrained' / 'example-state.npz')
   obs = perception.Observation(color=jnp.asarray(state['color'])[None],
                                depth=jnp.asarray(state['depth'])[None],
                                seen=jnp.asarray(state['depth'])[None] > 0)
-  greedy, _ = runner.make_policy((config, model, step), config)
+  greedy, _ = Source(config.network.method, config, model).policy(config, FROZEN)
   for changed in (True, False):
     chosen = greedy(obs, jnp.asarray([changed]), None, None)
     decision = loaded.act(state['color'], state['depth'], changed)
