@@ -47,8 +47,8 @@ def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
               protocols=tuple(PROTOCOLS), progress: bool = True) -> dict[str, dict]:
   """Trains `methods` x `seeds` for `actions` actions each into WORKDIR/METHOD-sSEED (`api.sweep`),
   each method with its config in `recipes` (method -> Config or preset name; `RECIPES` is the
-  screen's choice) or else `config`, evaluates them on `suites` under each of `protocols` (`api.evaluate`; frozen in
-  `out`, online in OUT/online) and writes each protocol's comparison.md (ours beside the
+  screen's choice) or else `config`, evaluates them on `suites` under each of `protocols`
+  (`api.evaluate`; frozen in `out`, online in OUT/online) and writes each protocol's comparison.md (ours beside the
   paper's, with the time spent) and the sweep's curves to `out`. Returns protocol -> report.
 
   Resumes where a killed call stopped: training from each run's latest checkpoint, evaluation
@@ -75,12 +75,7 @@ def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
       folders.check(folder, keep=True)
   except (folders.FolderError, ScenarioError) as e:
     raise api.EvaluationError(str(e)) from None
-  recipes = {m: arguments.config(call, (recipes or {}).get(m, config)) for m in methods}
-  try:
-    recipes = {m: validate(dataclasses.replace(c, train=dataclasses.replace(
-        c.train, total_actions=actions))) for m, c in recipes.items()}
-  except ConfigError as e:
-    raise api.TrainError(str(e)) from None
+  recipes = trained_for(call, config, recipes or {}, methods, actions)
   trainings = len(methods) * len(seeds)
   cases = sum(len(f) for f in files.values())
   expected = (trainings * actions / TRAIN_ACTIONS_PER_S
@@ -99,6 +94,25 @@ def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
                                           protocol=protocol, out=protocol.folder(out),
                                           resume=True, progress=progress)
     eval_s += evaluation_seconds(reports[protocol.name])
+  write_comparisons(reports, protocols, dirs, workdir, out, expected, eval_s, start, say)
+  return reports
+
+
+def trained_for(call: str, config: Config, recipes: dict, methods, actions: int) -> dict:
+  """method -> the config it trains with (its entry of `recipes`, else `config`) at `actions`
+  actions; api.TrainError for one that cannot be built."""
+  chosen = {m: arguments.config(call, recipes.get(m, config)) for m in methods}
+  try:
+    return {m: validate(dataclasses.replace(c, train=dataclasses.replace(
+        c.train, total_actions=actions))) for m, c in chosen.items()}
+  except ConfigError as e:
+    raise api.TrainError(str(e)) from None
+
+
+def write_comparisons(reports: dict, protocols, dirs, workdir: pathlib.Path, out: pathlib.Path,
+                      expected: float, eval_s: float, start: float, say) -> None:
+  """Each protocol's comparison.md (ours beside the paper's, with the wall time expected and
+  spent) and the sweep's curves, copied from its work directory, into `out`."""
   train_s = training_seconds(dirs)
   timing = (f'Expected wall time {expected / 60:.0f} min; spent {(train_s + eval_s) / 60:.0f} min '
             f'({train_s / 60:.0f} training, {eval_s / 60:.0f} evaluating: the sums of the '
@@ -111,7 +125,6 @@ def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
   curves = [pathlib.Path(shutil.copy(p, out)).name for p in sorted(workdir.glob('curves-*.png'))]
   say('\n' + '\n\n'.join(texts.values()) + f'\n\n{timing}\nwrote comparison.md of each '
       f'protocol under {out} and the sweep\'s training curves ({", ".join(curves)})')
-  return reports
 
 
 def training_seconds(workdirs) -> float:

@@ -222,20 +222,7 @@ class Trainer:
           pending_valid=state.pending_valid | learn)
     else:
       store, add = transition, learn
-    replay = jax.lax.cond(add, lambda r: replay_lib.add(r, store), lambda r: r, state.replay)
-    state = state.replace(replay=replay)
-    fresh = (store, add) if t.fresh_in_batch else None
-    keys, enabled = jax.random.split(k_learn, self.config.updates_per_step), learn & (replay.size > 0)
-    if len(keys) == 1 or jax.default_backend() == 'cpu':  # written out on a CPU, as `iterate`
-      losses = []
-      for k in keys:
-        state, loss = self.update(state, k, enabled, fresh)
-        losses.append(loss)
-      loss = sum(losses) / len(losses)
-    else:
-      state, losses = jax.lax.scan(lambda s, k: self.update(s, k, enabled, fresh), state, keys)
-      loss = jnp.mean(losses)
-
+    state, loss = self.learn(state, store, add, learn, k_learn)
     b = done.shape[0]
     state = state.replace(
         task=after, reserve=reserve, key=key, actions=state.actions + b,
@@ -244,6 +231,24 @@ class Trainer:
                   reward=out.reward, done=done, healthy=healthy, picked=info.picked, lost=info.lost,
                   loss=loss, epsilon=eps, explored=explored)
     return state, log
+
+  def learn(self, state: TrainState, store: replay_lib.Transition, add, learn, key
+            ) -> tuple[TrainState, jnp.ndarray]:
+    """Stores `store` when `add`, then runs `config.updates_per_step` updates when `learn` and
+    the replay holds any transition; the state and the updates' mean loss."""
+    t = self.config.train
+    replay = jax.lax.cond(add, lambda r: replay_lib.add(r, store), lambda r: r, state.replay)
+    state = state.replace(replay=replay)
+    fresh = (store, add) if t.fresh_in_batch else None
+    keys, enabled = jax.random.split(key, self.config.updates_per_step), learn & (replay.size > 0)
+    if len(keys) == 1 or jax.default_backend() == 'cpu':  # written out on a CPU, as `iterate`
+      losses = []
+      for k in keys:
+        state, loss = self.update(state, k, enabled, fresh)
+        losses.append(loss)
+      return state, sum(losses) / len(losses)
+    state, losses = jax.lax.scan(lambda s, k: self.update(s, k, enabled, fresh), state, keys)
+    return state, jnp.mean(losses)
 
   def iterate(self, state: TrainState, learn, epsilon) -> tuple[TrainState, StepLog]:
     """`train.steps_per_iteration` lockstep actions in one compiled call (StepLog gains a K axis).

@@ -441,6 +441,22 @@ def _fit_directions(normals) -> list[np.ndarray]:
   return out
 
 
+def _contacts(m, data, index, placed: set, slot: int, pos, quat, tolerance: float):
+  """(deepest penetration, the contact normals weighted by depth, pointing from the placed
+  objects to `slot`) of `slot` at `pos` against the `placed` slots."""
+  data.qpos[index.slot_qpos[slot]:index.slot_qpos[slot] + 7] = np.concatenate([pos, quat])
+  mujoco.mj_fwdPosition(m, data)
+  deepest, normals = 0.0, []
+  for c in data.contact[:data.ncon]:
+    s1, s2 = int(index.geom_slot[c.geom1]), int(index.geom_slot[c.geom2])
+    other = s2 if s1 == slot else s1 if s2 == slot else None
+    if other is None or other not in placed or -c.dist <= tolerance:
+      continue
+    deepest = max(deepest, -float(c.dist))
+    normals.append(-float(c.dist) * np.asarray(c.frame[:3]) * (1.0 if s2 == slot else -1.0))
+  return deepest, normals
+
+
 def fit_overlaps(case: Case, env, bound: float = FIT_BOUND,
                  tolerance: float = OVERLAP_TOLERANCE) -> tuple[Case, tuple[float, ...]]:
   """`case` made physically valid the way a simulator that drops objects leaves it: objects
@@ -460,21 +476,8 @@ def fit_overlaps(case: Case, env, bound: float = FIT_BOUND,
     data.qpos[index.slot_qpos[slot]:index.slot_qpos[slot] + 7] = np.concatenate(
         [park_position(slot), [1.0, 0.0, 0.0, 0.0]])
   placed, fitted, moves, stuck = set(), [], [], []
-
-  def contacts(slot, pos, quat):
-    """(deepest penetration, the contact normals weighted by depth, pointing from the placed
-    objects to `slot`) of `slot` at `pos` against the objects placed so far."""
-    data.qpos[index.slot_qpos[slot]:index.slot_qpos[slot] + 7] = np.concatenate([pos, quat])
-    mujoco.mj_fwdPosition(m, data)
-    deepest, normals = 0.0, []
-    for c in data.contact[:data.ncon]:
-      s1, s2 = int(index.geom_slot[c.geom1]), int(index.geom_slot[c.geom2])
-      other = s2 if s1 == slot else s1 if s2 == slot else None
-      if other is None or other not in placed or -c.dist <= tolerance:
-        continue
-      deepest = max(deepest, -float(c.dist))
-      normals.append(-float(c.dist) * np.asarray(c.frame[:3]) * (1.0 if s2 == slot else -1.0))
-    return deepest, normals
+  contacts = lambda slot, pos, quat: _contacts(m, data, index, placed, slot, pos, quat,
+                                               tolerance)
 
   def least(slot, pos, quat, direction):
     """The shortest move along `direction` (unit) that clears `slot`, or None within `bound`."""

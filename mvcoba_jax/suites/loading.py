@@ -48,8 +48,9 @@ def load(names, config: Config, blocks=(), fit_overlaps: float | None = None,
   settle_move = max(suite_cases.SETTLE_MOVE, fit_overlaps or 0.0)
   problems = [m for cases in cases_of.values()
               for m in suite_cases.case_problems(cases, config, settle_move)]
-  hints = [f'{name}: {hint}' for name, files in files_of.items()
-           if problems and not allow_bad_cases and (hint := suite_cases.other_block_table(files, config, table_of[name]))]
+  hints = [] if not problems or allow_bad_cases else [
+      f'{name}: {hint}' for name, files in files_of.items()
+      if (hint := suite_cases.other_block_table(files, config, table_of[name]))]
   return Suites(cases=cases_of, moves=moves_of, problems=problems, hints=hints)
 
 
