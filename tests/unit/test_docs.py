@@ -1,4 +1,7 @@
-"""The paths README.md and docs/ name exist: a file moved or renamed takes its mentions along."""
+"""The paths README.md and docs/ name exist, and the symbols README.md and the guides in docs/
+name resolve: a file moved or a function renamed takes its mentions along."""
+import dataclasses
+import importlib
 import pathlib
 import re
 
@@ -29,6 +32,61 @@ def test_every_path_the_docs_name_exists():
   missing = [f'{d.relative_to(ROOT)}:{n}: {p.relative_to(ROOT) if p.is_relative_to(ROOT) else p}'
              for d in _documents() for n, p in _named(d) if not p.exists()]
   assert not missing, '\n'.join(missing)
+
+
+# `module.name[.attr...]`, optionally called: a symbol of the package, named by its module's last
+# component (`runner.evaluate`), its full path (`mvcoba_jax.deploy.policy.choose`), or a config
+# field (`train.replay_ratio`). Spans ending in a file extension are paths, checked above.
+SYMBOL = re.compile(r'`([A-Za-z_]\w*(?:\.[A-Za-z_]\w*)+)(?:\([^`]*\))?`')
+EXTENSIONS = {'py', 'json', 'jsonl', 'md', 'png', 'npz', 'onnx', 'scn', 'txt', 'csv', 'yaml', 'sh',
+              'toml', 'mp4', 'log'}
+
+
+def _has(obj, names) -> bool:
+  """Whether `obj.a.b...` exists; a dataclass's fields count as its attributes."""
+  for name in names:
+    if isinstance(obj, type) and dataclasses.is_dataclass(obj) and name in {
+        f.name for f in dataclasses.fields(obj)}:
+      obj = object()
+    elif hasattr(obj, name):
+      obj = getattr(obj, name)
+    else:
+      return False
+  return True
+
+
+def _resolves(span: str, modules: dict[str, list[str]]) -> bool | None:
+  """Whether a symbol span names something that exists; None when it names nothing of ours."""
+  from mvcoba_jax.config import Config
+  parts = span.split('.')
+  if parts[-1] in EXTENSIONS:
+    return None
+  if parts[0] == 'mvcoba_jax':
+    for i in range(len(parts), 0, -1):
+      try:
+        return _has(importlib.import_module('.'.join(parts[:i])), parts[i:])
+      except ImportError:
+        continue
+  sections = {f.name: type(getattr(Config(), f.name)) for f in dataclasses.fields(Config)
+              if dataclasses.is_dataclass(getattr(Config(), f.name))}
+  if len(parts) == 2 and parts[0] in sections and _has(sections[parts[0]], parts[1:]):
+    return True
+  if parts[0] in modules:
+    return any(_has(importlib.import_module(m), parts[1:]) for m in modules[parts[0]])
+  return False if parts[0] in sections else None
+
+
+def test_every_symbol_the_guides_name_resolves():
+  modules = {}
+  for path in (ROOT / 'mvcoba_jax').rglob('*.py'):
+    parts = path.relative_to(ROOT).with_suffix('').parts
+    name = '.'.join(parts[:-1] if parts[-1] == '__init__' else parts)
+    modules.setdefault(name.split('.')[-1], []).append(name)
+  wrong = [f'{d.relative_to(ROOT)}:{n}: {span}'
+           for d in [ROOT / 'README.md', *sorted((ROOT / 'docs').glob('*.md'))]
+           for n, line in enumerate(d.read_text().splitlines(), 1)
+           for span in SYMBOL.findall(line) if _resolves(span, modules) is False]
+  assert not wrong, '\n'.join(wrong)
 
 
 def test_the_results_are_the_reproductions_tables():
