@@ -29,6 +29,8 @@ import subprocess
 import sys
 import time
 
+from mvcoba_jax.learner.checkpoint import holds_checkpoint
+
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 VALIDATION = ROOT / 'docs' / 'results' / 'validation'
 
@@ -153,7 +155,7 @@ def main(argv=None) -> int:
         if not (train_dir / 'eval_summary.json').is_file():
           if not run(['mvcoba-train', *VARIANTS[variant], '--method', method, '--seed', str(seed),
                       '--workdir', str(train_dir), '--eval-actions', '1']
-                     + (['--resume'] if (train_dir / 'checkpoints').is_dir() else ['--overwrite']),
+                     + (['--resume'] if holds_checkpoint(train_dir) else ['--overwrite']),
                      log, f'train-{name}'):
             continue
         if not (eval_dir / 'results.json').is_file() or not (eval_dir / 'done').is_file():
