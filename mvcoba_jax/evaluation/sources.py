@@ -19,6 +19,7 @@ BASELINES = ('heuristic',)  # policies without training (`runner.heuristic_polic
 
 @dataclasses.dataclass(frozen=True)
 class Source:
+  """A policy an evaluation plays, with what its results rows record of it."""
   name: str  # the row's method: the network's method, or baseline:NAME
   config: Config | None = None  # a trained network's, as evaluated; None: the evaluation's
   network: Any = None  # networks.QNetwork; None for a baseline
