@@ -22,7 +22,7 @@ from mvcoba_jax.policy import PolicyError
 from mvcoba_jax.sim.scenarios import MAX_FIT_BOUND, ScenarioError, case_to_layout, stack_layouts
 from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites import cases as suite_cases
-from mvcoba_jax.suites import loading
+from mvcoba_jax.suites import loading, suite_files
 
 # What an evaluation writes to its output folder: refused to a new one without `resume` or
 # `overwrite`.
@@ -97,7 +97,7 @@ class EvalSpec:
 
 def check_work(runs: int, max_actions: int, suites: dict[str, list]) -> None:
   """Refuses runs per case and action caps whose work no evaluation could finish or hold,
-  naming the limit; `suites`: name -> its cases (or case files)."""
+  naming the limit; `suites`: name -> its case files."""
   if not 1 <= max_actions <= MAX_ACTIONS_LIMIT:
     raise EvaluationError(f'--max-actions {max_actions}: allowed range [1, {MAX_ACTIONS_LIMIT}]')
   for name, files in suites.items():
@@ -111,10 +111,10 @@ def evaluate(spec: EvalSpec) -> dict:
   each policy's row of each suite, written to `spec.out` after each row."""
   try:  # everything that can be wrong with the input fails here, before any compile
     folders.check(spec.out, RESULT_FILES, keep=spec.resume, overwrite=spec.overwrite)
+    files_of = suite_files(list(spec.suites))
+    check_work(spec.runs, spec.max_actions, files_of)  # before the cases are read and settled
     base = config_lib.resolve(spec.config, spec.overrides)
-    suites = loading.load(spec.suites, base, spec.blocks, spec.fit_overlaps,
-                          spec.allow_bad_cases)
-    check_work(spec.runs, spec.max_actions, suites.cases)
+    suites = loading.load(files_of, base, spec.blocks, spec.fit_overlaps, spec.allow_bad_cases)
     sources = ([sources_lib.trained(path, spec.overrides) for path in spec.checkpoints]
                + ([sources_lib.baseline(spec.baseline)] if spec.baseline else []))
     names = [s.name for s in sources]

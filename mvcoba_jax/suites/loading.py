@@ -1,5 +1,6 @@
-"""Suites as an evaluation takes them: names to case files, each read with its block table,
-optionally fitted apart where objects interpenetrate, and load-checked (`cases.case_problems`)."""
+"""Suites as an evaluation takes them: their case files (`suite_files`) each read with its block
+table, optionally fitted apart where objects interpenetrate, and load-checked
+(`cases.case_problems`)."""
 from __future__ import annotations
 
 import dataclasses
@@ -9,7 +10,6 @@ from mvcoba_jax.config import Config
 from mvcoba_jax.sim.scenarios import Case, ScenarioError, read_case
 from mvcoba_jax.sim.shapes import BLOCK_TABLES
 from mvcoba_jax.suites import cases as suite_cases
-from mvcoba_jax.suites import suite_files
 
 
 @dataclasses.dataclass(frozen=True)
@@ -21,14 +21,14 @@ class Suites:
   hints: list[str]  # a block table under which the failing suites would load
 
 
-def load(names, config: Config, blocks=(), fit_overlaps: float | None = None,
-         allow_bad_cases: bool = False) -> Suites:
-  """The suites `names` (`suite_files`) read in `config`'s workspace: `blocks` ([SUITE=]TABLE
+def load(files_of: dict[str, list[pathlib.Path]], config: Config, blocks=(),
+         fit_overlaps: float | None = None, allow_bad_cases: bool = False) -> Suites:
+  """The suites of `files_of` (suite -> its case files, as `suite_files` gives them) read in
+  `config`'s workspace: `blocks` ([SUITE=]TABLE
   items, `block_tables`) name the shapes of VPG-format cases; `fit_overlaps` (m) moves objects
   that interpenetrate as placed apart first (`cases.fitted`). Raises ScenarioError for a file
   or block table that cannot serve; the load check's findings are returned, not raised, with
   hints unless `allow_bad_cases`."""
-  files_of = suite_files(list(names))
   tables = block_tables(blocks, list(files_of))
   check_blocks(tables, files_of)
   table_of = {name: tables.get(name, tables.get('', 'vpg')) for name in files_of}
