@@ -16,9 +16,8 @@ import dataclasses
 import json
 import sys
 
-import cv2
-
-from mvcoba_jax.deploy import DeployError, OnnxPolicy, heightmaps, load_calibration, read_depth
+from mvcoba_jax.deploy import (DeployError, OnnxPolicy, heightmaps, load_calibration, read_color,
+                               read_depth)
 
 
 def act(calibration, model, depth_files, color_files=None, changed=True):
@@ -28,14 +27,7 @@ def act(calibration, model, depth_files, color_files=None, changed=True):
     raise DeployError(f'{calibration}: {len(cal.cameras)} cameras, {len(depth_files)} depth and '
                       f'{len(color_files or [])} colour images given')
   depths = [read_depth(path, camera) for path, camera in zip(depth_files, cal.cameras)]
-  colors = None
-  if color_files:
-    colors = []
-    for path in color_files:
-      image = cv2.imread(str(path), cv2.IMREAD_COLOR)
-      if image is None:
-        raise DeployError(f'{path}: cannot read a colour image')
-      colors.append(cv2.cvtColor(image, cv2.COLOR_BGR2RGB))
+  colors = [read_color(path) for path in color_files] if color_files else None
   return OnnxPolicy(model).act(*heightmaps(depths, cal, colors), changed, cal)
 
 

@@ -25,6 +25,14 @@ def read_depth(path, camera: Camera) -> np.ndarray:
   return image.astype(np.float64) * camera.depth_scale
 
 
+def read_color(path) -> np.ndarray:
+  """A colour image file (any format OpenCV reads) as RGB uint8 (OpenCV reads BGR)."""
+  image = cv2.imread(str(path), cv2.IMREAD_COLOR)
+  if image is None:
+    raise DeployError(f'{path}: cannot read a colour image')
+  return cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
+
+
 def points(depth: np.ndarray, camera: Camera, calibration: Calibration, where: str):
   """(N, 3) workspace-frame points of a depth image (metres), with their pixel indices."""
   if depth.shape != (camera.height, camera.width):

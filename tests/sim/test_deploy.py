@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from mvcoba_jax import export, policy
-from mvcoba_jax.deploy import DeployError, OnnxPolicy, calibration_from_dict, heightmaps, read_depth
+from mvcoba_jax.deploy import (DeployError, OnnxPolicy, calibration_from_dict, heightmaps,
+                               read_color, read_depth)
 from mvcoba_jax.learner import task
 from mvcoba_jax.sim import cameras
 from tests.helpers import make_env
@@ -161,14 +162,14 @@ def test_the_deploy_extra_alone_turns_camera_files_into_the_same_action(scenes, 
   cal_file = tmp_path / 'calibration.json'
   cal_file.write_text(json.dumps(calibration(env)))
   cal = calibration_from_dict(calibration(env))
-  depth_files, color_files = [], []
+  depth_files, color_files, colors = [], [], []
   for v, image in enumerate(images):
     depth_files.append(tmp_path / f'depth{v}.png')
     cv2.imwrite(str(depth_files[-1]), np.round(np.asarray(image.depth[2]) * 1000).astype(np.uint16))
     color_files.append(tmp_path / f'color{v}.png')
-    rgb = np.round(np.asarray(image.rgb[2]) * 255).astype(np.uint8)
-    cv2.imwrite(str(color_files[-1]), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
-  colors = [cv2.cvtColor(cv2.imread(str(f)), cv2.COLOR_BGR2RGB) for f in color_files]
+    colors.append(np.round(np.asarray(image.rgb[2]) * 255).astype(np.uint8))
+    cv2.imwrite(str(color_files[-1]), cv2.cvtColor(colors[-1], cv2.COLOR_RGB2BGR))
+    np.testing.assert_array_equal(read_color(color_files[-1]), colors[-1])  # RGB, as written
   want = onnx.act(*heightmaps([read_depth(f, c) for f, c in zip(depth_files, cal.cameras)], cal,
                               colors), False, cal)
 
