@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Copies a study's finished evaluations (eval/NAME, and eval-online/NAME of its --protocol online
 # runs) and its log into docs/results/recipe/STAGE (screen by default; the layout recipe_table.py
-# reads: eval/NAME/results.json, study.jsonl) and writes its table beside them. The log joins the one landed before (a study resumed in another sitting
+# reads: eval/NAME/results.json, study.jsonl) and writes its table beside them (and for the
+# per-method screen, `baselines`, each method's chosen preset in choice.md). The log joins the one landed before (a study resumed in another sitting
 # with --landed writes a new one), each entry once.
 #   bash experiments/land.sh /work/study-recipe [screen|confirm]
 set -euo pipefail
@@ -18,3 +19,6 @@ touch "$screen/study.jsonl"
 cat "$screen/study.jsonl" "$study/study.jsonl" | awk '!seen[$0]++' > "$screen/.study.jsonl"
 mv "$screen/.study.jsonl" "$screen/study.jsonl"
 python experiments/recipe_table.py --workdir "$screen" > "$screen/table.md"
+if [ "${2:-}" = baselines ]; then  # the per-method screen: each method's preset, once screened
+  python experiments/recipe_table.py --workdir "$screen" --choose > "$screen/choice.md"
+fi

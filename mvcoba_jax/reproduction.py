@@ -34,8 +34,9 @@ PROTOCOLS = ('frozen', 'online')  # the paper's two: `evaluation.protocols.PROTO
 
 
 # method -> the preset it trains with in the reproduction: the one it validated best with in the
-# per-method screen of issue 52 (docs/results/recipe/baselines); until that screen has landed,
-# every method trains the default preset's recipe.
+# per-method screen (docs/results/recipe/baselines/choice.md, by the rule in
+# experiments/recipe_table.py; tests/unit/test_recipe_table.py holds the two together). A method
+# not yet screened on every preset trains the default.
 RECIPES = {method: 'default' for method in paper.PAPER_NAMES}
 
 
