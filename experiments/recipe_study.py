@@ -15,7 +15,8 @@ writes it) so does a run whose evaluation landed there from an earlier sitting. 
 online` evaluates with `mvcoba-eval --online` into WORKDIR/eval-online/NAME instead (the paper's
 test protocol; the same trained runs). A variant that continues another (`CONTINUES`)
 starts from a copy of that variant's finished run of the same seed and resumes it to its own
-total. Then `mvcoba-eval --tables` joins every
+total. A run of the per-method screen (`preset_*`) whose preset can no longer be chosen for its
+method (`recipe_table.ruled_out`, from the evaluations finished here and landed) is passed over. Then `mvcoba-eval --tables` joins every
 evaluation into WORKDIR/tables, whose rows group by training config: one interval per variant
 over its seeds. Each command, its commit and its wall time go to WORKDIR/study.jsonl.
 """
@@ -116,6 +117,17 @@ def run(command: list[str], log: pathlib.Path, what: str) -> bool:
   return code == 0
 
 
+def cannot_change_choice(variant: str, method: str, *works) -> bool:
+  """Whether a run of the per-method screen is futile: its preset is ruled out for the method
+  by the evaluations already finished (`recipe_table.ruled_out`)."""
+  import recipe_table  # it imports this module's VARIANTS
+  preset = next((p for p, v in recipe_table.SCREEN.items() if v == variant), None)
+  if preset is None:
+    return False
+  scores = recipe_table.screen_scores(*[w for w in works if w]).get(method, {})
+  return preset in recipe_table.ruled_out(scores)
+
+
 def main(argv=None) -> int:
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--variants', nargs='+', default=list(VARIANTS), choices=list(VARIANTS))
@@ -141,6 +153,10 @@ def main(argv=None) -> int:
       for method in args.methods:
         name = run_name(variant, method, seed)
         if landed and (landed / evals / name / 'done').is_file():
+          continue
+        if cannot_change_choice(variant, method, work, landed):
+          print(f'{name}: passed over: its preset cannot be chosen for {method} whatever it '
+                f'scores (recipe_table.ruled_out)', flush=True)
           continue
         train_dir, eval_dir = work / variant / f'{method}-s{seed}', work / evals / name
         if variant in CONTINUES and not train_dir.exists():

@@ -54,44 +54,82 @@ def by_suite_name(folders: list[str]) -> dict:
   return merged
 
 
-def evaluations(work: pathlib.Path) -> dict[str, list[str]]:
-  """row (VARIANT or VARIANT-METHOD) -> its finished evaluation folders, one per seed."""
+def evaluations(*works: pathlib.Path) -> dict[str, list[str]]:
+  """row (VARIANT or VARIANT-METHOD) -> its finished evaluation folders, one per seed (a run
+  evaluated in several of `works`, as a study and its landed copy, counts once)."""
+  found = {}
+  for work in works:
+    for folder in sorted((work / 'eval').iterdir()) if (work / 'eval').is_dir() else []:
+      if (folder / 'done').is_file():
+        found.setdefault(folder.name, str(folder))
   rows = {}
-  for folder in sorted((work / 'eval').iterdir()):
-    if (folder / 'done').is_file():
-      rows.setdefault(folder.name.rsplit('-s', 1)[0], []).append(str(folder))
+  for name in sorted(found):
+    rows.setdefault(name.rsplit('-s', 1)[0], []).append(found[name])
   return rows
 
 
-def screen_scores(work: pathlib.Path) -> dict[str, dict[str, float]]:
-  """method -> preset -> its score: grasp success averaged over the validation suites, seeds and
-  cases, for the methods evaluated from SCREEN_SEEDS seeds on every preset of SCREEN."""
-  rows, scores = evaluations(work), {}
-  for row, folders in rows.items():
+def screen_scores(*works: pathlib.Path) -> dict[str, dict[str, list[float]]]:
+  """method -> preset of SCREEN -> each evaluated seed's score: its grasp success averaged over
+  the validation suites and their cases."""
+  scores = {}
+  for row, folders in evaluations(*works).items():
     variant, _, method = row.partition('-')
     preset = next((p for p, v in SCREEN.items() if v == variant), None)
-    if preset is None or len(folders) < SCREEN_SEEDS:
+    if preset is None:
       continue
-    means = [report.seed_intervals(r, minimum=1) for r in by_suite_name(folders).values()]
-    scores.setdefault(method or 'mvcoba', {})[preset] = statistics.mean(
-        next(iter(m.values()))['grasp_success'][0] for m in means)
-  return {m: scores[m] for m in sorted(scores, key=list(paper.PAPER_NAMES).index)
-          if len(scores[m]) == len(SCREEN)}
+    per_suite = [next(iter(report.seed_intervals(r, minimum=1).values()))['per_seed']
+                 ['grasp_success'] for r in by_suite_name(folders).values()]
+    scores.setdefault(method or 'mvcoba', {})[preset] = [statistics.mean(s)
+                                                         for s in zip(*per_suite)]
+  return {m: scores[m] for m in sorted(scores, key=list(paper.PAPER_NAMES).index)}
 
 
-def choose(scores: dict[str, float]) -> str:
-  """The preset a method trains with: the best score, unless it beats `default`'s by less than
-  TIE_MARGIN points (a tie, `default`)."""
-  best = max(scores, key=scores.get)
-  return best if scores[best] - scores['default'] >= TIE_MARGIN else 'default'
+def _bounds(seeds: list[float]) -> tuple[float, float]:
+  """The lowest and highest score the preset can end with, its missing seeds at 0 and at 100."""
+  missing = max(SCREEN_SEEDS - len(seeds), 0)
+  return statistics.mean(seeds + [0.0] * missing), statistics.mean(seeds + [100.0] * missing)
+
+
+def ruled_out(scores: dict[str, list[float]]) -> set[str]:
+  """The presets (never `default`) that cannot be chosen whatever the seeds still to run score:
+  even at 100 they stay below `default`'s lowest outcome plus TIE_MARGIN, or below another
+  preset's lowest. Their missing seeds cannot change the choice, so the screen does not run
+  them."""
+  bounds = {p: _bounds(scores.get(p, [])) for p in SCREEN}
+  return {p for p in SCREEN if p != 'default' and (
+      bounds[p][1] < bounds['default'][0] + TIE_MARGIN
+      or any(bounds[p][1] < bounds[q][0] for q in SCREEN if q != p))}
+
+
+def choose(scores: dict[str, list[float]]) -> str | None:
+  """The preset a method trains with: the best mean score, unless it beats `default`'s by less
+  than TIE_MARGIN points (a tie: `default`); None while `default`, or a preset not ruled out,
+  lacks a seed."""
+  out = ruled_out(scores)
+  open_ = [p for p in SCREEN if p not in out]
+  if any(len(scores.get(p, [])) < SCREEN_SEEDS for p in open_):
+    return None
+  means = {p: statistics.mean(scores[p]) for p in open_}
+  best = max(means, key=means.get)
+  return best if means[best] - means['default'] >= TIE_MARGIN else 'default'
 
 
 def choice_table(work: pathlib.Path) -> str:
-  scores = screen_scores(work)
+  """Markdown: each method's score per preset (mean, with the number of seeds) and its choice."""
   head = ('| method | ' + ' | '.join(SCREEN) + ' | trains with |\n|---|'
           + '---|' * (len(SCREEN) + 1))
-  return '\n'.join([head] + [f'| {m} | ' + ' | '.join(f'{s[p]:.1f}' for p in SCREEN)
-                             + f' | {choose(s)} |' for m, s in scores.items()])
+  lines = []
+  for method, scores in screen_scores(work).items():
+    out = ruled_out(scores)
+    cells = [f'{statistics.mean(scores[p]):.1f} ({len(scores[p])})' if scores.get(p) else '-'
+             for p in SCREEN]
+    cells = [c + (', ruled out' if p in out else '') for c, p in zip(cells, SCREEN)]
+    lines.append(f'| {method} | ' + ' | '.join(cells) + f' | {choose(scores) or "(open)"} |')
+  return '\n'.join([head] + lines + ['', f'Score: grasp success averaged over the validation '
+                                     f'suites, seeds (in brackets) and cases. A preset other '
+                                     f'than default wins by {TIE_MARGIN:g} points or more; '
+                                     f'"ruled out": it cannot be chosen whatever its seeds still '
+                                     f'to run score, and they are not run.'])
 
 
 def table(work: pathlib.Path, metrics=METRICS) -> str:

@@ -31,26 +31,39 @@ def test_seeds_evaluated_from_two_checkouts_meet_in_one_row(tmp_path):
 
 
 def test_a_preset_wins_a_method_only_by_the_tie_margin():
-  assert recipe_table.choose({'default': 80.0, 'authors': 83.5, 'paper_text': 70.0}) == 'authors'
-  assert recipe_table.choose({'default': 80.0, 'authors': 82.9, 'paper_text': 70.0}) == 'default'
-  assert recipe_table.choose({'default': 90.0, 'authors': 85.0, 'paper_text': 95.0}) == 'paper_text'
+  choose = recipe_table.choose
+  assert choose({'default': [80, 80], 'authors': [83, 84], 'paper_text': [70, 70]}) == 'authors'
+  assert choose({'default': [80, 80], 'authors': [82, 83.8], 'paper_text': [70, 70]}) == 'default'
+  assert choose({'default': [90, 90], 'authors': [85, 85], 'paper_text': [95, 95]}) == 'paper_text'
 
 
-def test_a_method_is_scored_once_both_seeds_of_every_preset_are_evaluated(tmp_path):
-  """The score is grasp success over suites, seeds and cases; a method missing a seed of one
-  preset is not scored (it trains the default until its screen is complete)."""
-  for preset, successes in (('default', [4, 2]), ('authors', [4, 4]), ('paper_text', [2, 2])):
+def test_a_preset_that_cannot_win_is_ruled_out_and_its_missing_seed_not_needed():
+  """At 100 on its missing seed authors reaches (90 + 100) / 2 = 95 < 93 + 3: ruled out, and the
+  choice is made without it; paper_text at 100 could still reach 85 > default + 3 = 83."""
+  decided = {'default': [93, 93], 'authors': [90], 'paper_text': [50, 50]}
+  assert recipe_table.ruled_out(decided) == {'authors', 'paper_text'}
+  assert recipe_table.choose(decided) == 'default'
+  open_ = {'default': [80, 80], 'authors': [70, 70], 'paper_text': [70]}
+  assert recipe_table.ruled_out(open_) == {'authors'}
+  assert recipe_table.choose(open_) is None
+  assert recipe_table.ruled_out({'default': [95]}) == set()  # nothing is known of the others
+
+
+def test_each_seed_is_scored_over_the_suites(tmp_path):
+  """A seed's score is its grasp success averaged over the suites' cases, then the suites."""
+  for preset, successes in (('default', [4, 2]), ('authors', [4, 4])):
     for seed in (0, 1):
       _evaluation(tmp_path / 'eval' / f'preset_{preset}-vpg-s{seed}', '/t/val-random', successes)
-  _evaluation(tmp_path / 'eval' / 'preset_default-s0', '/t/val-random', [4])  # MV-COBA, one seed
+  _evaluation(tmp_path / 'eval' / 'preset_default-s0', '/t/val-random', [4])  # MV-COBA
+  _evaluation(tmp_path / 'eval' / 'preset_paper_text-s0', '/t/val-ordered', [2])
   assert recipe_table.screen_scores(tmp_path) == {
-      'vpg': {'default': 75.0, 'authors': 100.0, 'paper_text': 50.0}}
+      'mvcoba': {'default': [100.0], 'paper_text': [50.0]},
+      'vpg': {'default': [75.0, 75.0], 'authors': [100.0, 100.0]}}
 
 
 def test_the_reproduction_trains_each_method_with_the_landed_screens_choice():
   """RECIPES follows the screen in docs/results/recipe/baselines: the chosen preset for every
-  method screened in full, the default for the rest."""
+  method the screen has decided, the default for the rest."""
   from mvcoba_jax.reproduction import RECIPES
   scores = recipe_table.screen_scores(ROOT / 'docs' / 'results' / 'recipe' / 'baselines')
-  assert RECIPES == {m: recipe_table.choose(scores[m]) if m in scores else 'default'
-                     for m in RECIPES}
+  assert RECIPES == {m: recipe_table.choose(scores.get(m, {})) or 'default' for m in RECIPES}
