@@ -1,4 +1,5 @@
 """The recipe study's table (experiments/recipe_table.py) from evaluation folders."""
+import dataclasses
 import json
 import pathlib
 import sys
@@ -67,3 +68,15 @@ def test_the_reproduction_trains_each_method_with_the_landed_screens_choice():
   from mvcoba_jax.reproduction import RECIPES
   scores = recipe_table.screen_scores(ROOT / 'docs' / 'results' / 'recipe' / 'baselines')
   assert RECIPES == {m: recipe_table.choose(scores.get(m, {})) or 'default' for m in RECIPES}
+
+
+def test_the_reproduction_trains_a_method_its_recipe_at_the_papers_actions():
+  """`reproduction.trained_for`: a method named in the recipes gets that preset, the others the
+  command's config, all at the reproduction's action count."""
+  from mvcoba_jax.config import resolve
+  from mvcoba_jax.reproduction import trained_for
+  configs = trained_for('test', resolve('default'), {'vpg': 'authors'}, ['mvcoba', 'vpg'], 3000)
+  assert configs['vpg'] == dataclasses.replace(resolve('authors'), train=dataclasses.replace(
+      resolve('authors').train, total_actions=3000))
+  assert configs['mvcoba'].env.occluded_share == 0.25 and configs['vpg'].env.occluded_share == 0
+  assert configs['mvcoba'].train.total_actions == 3000
