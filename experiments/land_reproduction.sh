@@ -2,8 +2,9 @@
 # Lands an mvcoba-reproduce as its protocols finish: the tables of each finished protocol (its
 # comparison.md written) into docs/results/reproduction, the tables of an earlier training into
 # docs/results/archive/reproduction-COMMIT (the commit that landed them), and seed 0 of every
-# method exported to pretrained/METHOD with its figures under each landed protocol and the commit
-# that trained it (params.npz and model.json: the ONNX graph is one mvcoba-export away). Run it
+# method but MV-COBA exported to pretrained/METHOD with its figures under each landed protocol and
+# the commit that trained it (params.npz and model.json: the ONNX graph is one mvcoba-export
+# away; pretrained/mvcoba is what `mvcoba-train` gives, landed by land_pretrained.sh). Run it
 # again when the online protocol finishes: the same training's tables are refreshed in place.
 #   bash experiments/land_reproduction.sh WORKDIR TABLES TRAINED_AT_COMMIT
 set -euo pipefail
@@ -25,6 +26,7 @@ fi
 echo "$commit" > "$dest/trained-at"
 for run in "$workdir"/*-s0; do
   method=$(basename "$run" -s0)
+  [ "$method" = mvcoba ] && continue
   rm -rf "pretrained/$method"
   mvcoba-export --checkpoint "$run" --out "pretrained/$method" --commit "$commit" \
     --results "${results[@]}"
