@@ -23,7 +23,7 @@ from mvcoba_jax.evaluation import paper, report
 
 METRICS = ('grasp_success', 'completion', 'objects_picked')
 # The per-method screen (issue 52): each method on every preset at the reproduction's 3000
-# actions. A preset other than `default` wins only by more than TIE_MARGIN points; two seeds
+# actions. A preset other than `default` wins only by TIE_MARGIN points or more; two seeds
 # give no interval that could separate presets, so the margin guards against choosing noise.
 SCREEN = {'default': 'preset_default', 'authors': 'preset_authors',
           'paper_text': 'preset_paper_text'}

@@ -35,8 +35,7 @@ PROTOCOLS = ('frozen', 'online')  # the paper's two: `evaluation.protocols.PROTO
 
 # method -> the preset it trains with in the reproduction: the one it validated best with in the
 # per-method screen (docs/results/recipe/baselines/choice.md, by the rule in
-# experiments/recipe_table.py; tests/unit/test_recipe_table.py holds the two together). A method
-# not yet screened on every preset trains the default.
+# experiments/recipe_table.py; tests/unit/test_recipe_table.py holds the two together).
 RECIPES = {'mvcoba': 'default', 'mvcoba_2fcn': 'authors', 'vpg': 'authors', 'grasp_only': 'default',
            'mvp': 'default', 'cpg': 'default'}
 
