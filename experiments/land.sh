@@ -2,9 +2,10 @@
 # Copies a study's finished evaluations (eval/NAME, and eval-online/NAME of its --protocol online
 # runs) and its log into docs/results/recipe/STAGE (screen by default; the layout recipe_table.py
 # reads: eval/NAME/results.json, study.jsonl) and writes its table beside them (and for the
-# per-method screen, `baselines`, each method's chosen preset in choice.md). The log joins the one landed before (a study resumed in another sitting
-# with --landed writes a new one), each entry once.
-#   bash experiments/land.sh /work/study-recipe [screen|confirm]
+# per-method screen, `baselines`, each method's chosen preset in choice.md). The log joins the one
+# landed before (a study resumed in another sitting with --landed writes a new one), each entry
+# once.
+#   bash experiments/land.sh /work/study-recipe [screen|confirm|baselines|batch]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 study=$1 screen=docs/results/recipe/${2:-screen}

@@ -18,7 +18,8 @@ starts from a copy of that variant's finished run of the same seed and resumes i
 total. A run of the per-method screen (`preset_*`) whose preset can no longer be chosen for its
 method (`recipe_table.ruled_out`, from the evaluations finished here and landed) is passed over.
 Then `mvcoba-eval --tables` joins every evaluation into WORKDIR/tables, whose rows group by
-training config: one interval per variant over its seeds. Each command, its commit and its wall time go to WORKDIR/study.jsonl.
+training config: one interval per variant over its seeds. Each command, its commit and its wall
+time go to WORKDIR/study.jsonl.
 """
 from __future__ import annotations
 
