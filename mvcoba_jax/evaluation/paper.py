@@ -120,29 +120,41 @@ def comparisons(results: dict[str, dict]) -> str:
   return '\n\n'.join(parts)
 
 
-def summary(results: dict[str, dict], suites=('random', 'ordered', 'occluded')) -> str:
-  """Markdown of one compact table for a README: per method (rows) and suite, our grasp success
-  with its 95% interval over seeds and our objects picked, each with the paper's figure in
-  brackets, in whole per cent. The full tables are `comparisons`."""
+# A README table's columns per suite: (our metric, the paper's figure beside it, its label, whether
+# it shows our interval). The paper's suites: grasp success and objects picked (its completion);
+# VPG's hard cases against VPG's own table: runs completed, grasp success, action efficiency.
+SUMMARY = (('grasp_success', 'grasp_success', 'grasp %', True),
+           ('objects_picked', 'completion', 'picked %', False))
+VPG_SUMMARY = (('completion', 'runs_completed', 'completed %', True),
+               ('grasp_success', 'grasp_success', 'grasp %', True),
+               ('action_efficiency', 'action_efficiency', 'efficiency %', True))
+
+
+def summary(results: dict[str, dict], suites=('random', 'ordered', 'occluded'),
+            columns=SUMMARY) -> str:
+  """Markdown of one compact table for a README: per method (rows) and suite, our `columns`
+  (`SUMMARY`, `VPG_SUMMARY`), the interval over seeds where a column asks for it, each with the
+  paper's figure in brackets, in whole per cent. The full tables are `comparisons`."""
   over = {suite: report.seed_intervals(results[suite], minimum=1) for suite in suites
           if suite in results}
-  head = ('| method | seeds | ' + ' | '.join(f'{s}: grasp % | picked %' for s in over)
-          + ' |\n|---|---|' + '---|---|' * len(over))
+  labels = [label for *_, label, _ in columns]
+  head = ('| method | seeds | '
+          + ' | '.join(f'{s}: {labels[0]} | ' + ' | '.join(labels[1:]) for s in over)
+          + ' |\n|---|---|' + '---|' * len(columns) * len(over))
   whole = lambda v: f'{v:.0f}'
   lines = [head]
   for method in dict.fromkeys(m for rows in over.values() for m in rows):
     name = PAPER_NAMES.get(report.method_of(method), method)
     cells, seeds = [], set()
     for suite, rows in over.items():
-      entry, paper = rows.get(method), RESULTS.get(suite, {}).get(name, {})
-      theirs = lambda key: f' ({whole(paper[key])})' if key in paper else ''
-      grasp, picked = (entry or {}).get('grasp_success'), (entry or {}).get('objects_picked')
-      seeds.add((entry or {}).get('seeds'))
-      cells += ['-' if grasp is None else
-                f'{whole(grasp[0])}' + ('' if math.isnan(grasp[1]) else
-                                        f' [{whole(grasp[1])}, {whole(grasp[2])}]')
-                + theirs('grasp_success'),
-                '-' if picked is None else whole(picked[0]) + theirs('completion')]
+      entry, paper = rows.get(method) or {}, RESULTS.get(suite, {}).get(name, {})
+      seeds.add(entry.get('seeds'))
+      for key, paper_key, _, interval in columns:
+        ours = entry.get(key)
+        theirs = f' ({whole(paper[paper_key])})' if paper_key in paper else ''
+        cells.append('-' if ours is None else whole(ours[0]) + (
+            f' [{whole(ours[1])}, {whole(ours[2])}]' if interval and not math.isnan(ours[1])
+            else '') + theirs)
     count = '/'.join(str(s) for s in sorted(s for s in seeds if s))
     lines.append(f'| {name} | {count} | ' + ' | '.join(cells) + ' |')
   return '\n'.join(lines)

@@ -177,3 +177,22 @@ def test_rows_of_one_training_evaluated_by_two_versions_pool():
   rows = {'mvcoba (s0)': row(70.0, 0, before), 'mvcoba (s1)': row(80.0, 1, today)}
   assert report.training_groups(rows) == {'mvcoba': ['mvcoba (s0)', 'mvcoba (s1)']}
   assert report.seed_intervals(rows)['mvcoba']['grasp_success'][0] == pytest.approx(75.0)
+
+
+def test_readme_tables_put_the_papers_figures_beside_ours():
+  """The compact tables: the paper's suites with grasp success (its interval) and objects picked;
+  VPG's hard cases with runs completed, grasp success and action efficiency beside VPG's own."""
+  from mvcoba_jax.evaluation import paper
+  def row(grasp, seed):
+    cases = {c: {key: grasp + i for key, _ in report.METRICS} for i, c in enumerate('ab')}
+    training = {'train': {'gamma': 0.5}, 'network': {'method': 'vpg'}}
+    return {'cases': cases, 'mean': {}, 'settings': {'training': training, 'training_seed': seed}}
+  rows = {f'vpg (s{s})': row(70.0 + 2 * s, s) for s in range(5)}
+  table = paper.summary({'random': rows, 'vpg': rows}).splitlines()
+  assert table[0] == '| method | seeds | random: grasp % | picked % |'
+  assert table[2] == '| VPG | 5 | 74 [71, 78] (65) | 74 (71) |'
+  vpg = paper.summary({'random': rows, 'vpg': rows}, suites=('vpg',),
+                      columns=paper.VPG_SUMMARY).splitlines()
+  assert vpg[0] == '| method | seeds | vpg: completed % | grasp % | efficiency % |'
+  assert vpg[2].count('] (') == 3 and '(83) |' in vpg[2] and '(77) |' in vpg[2] \
+      and vpg[2].endswith('(60) |')
