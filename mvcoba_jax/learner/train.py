@@ -249,9 +249,10 @@ def sweep(config: Config, workdir, *, methods=None, seeds=None, resume: bool = F
   `workdir` (curves-METRIC.png: each method's mean over its seeds, with a band).
 
   `resume` passes over a run trained to the end with this very config (None in the result),
-  continues one with a checkpoint and starts the others; it is refused when no run holds a
-  checkpoint (a mistyped folder). `mvcoba_jax.evaluate` of the runs' folders then gives each
-  method's interval over the seeds.
+  continues one with a checkpoint and starts the others, again where one of this config was
+  stopped before its first checkpoint (its logs replaced: they hold no work to keep); it is
+  refused when no run holds a checkpoint (a mistyped folder). `mvcoba_jax.evaluate` of the runs'
+  folders then gives each method's interval over the seeds.
   """
   call = 'mvcoba_jax.sweep'
   config, workdir = arguments.config(call, config), arguments.path(call, 'workdir', workdir)
@@ -275,8 +276,12 @@ def sweep(config: Config, workdir, *, methods=None, seeds=None, resume: bool = F
       say('  finished already: its last checkpoint, config and greedy evaluation are there')
       results[run] = None
       continue
+    again = resume and not holds_checkpoint(run) and same_config(run, run_config)
+    if again:
+      say('  stopped before its first checkpoint: starting it again')
     results[run] = train(run_config, run, resume=resume and holds_checkpoint(run),
-                         overwrite=overwrite, eval_actions=eval_actions, progress=progress)
+                         overwrite=overwrite or again, eval_actions=eval_actions,
+                         progress=progress)
   if jax.process_index() == 0:
     for path in plot_sweep(list(runs), config.train.curve_window, pathlib.Path(workdir)):
       say(f'sweep curves: {path}')
@@ -287,13 +292,17 @@ def finished(workdir: pathlib.Path, config: Config) -> bool:
   """Whether a run has nothing left to do: trained to the end with this very config and
   evaluated (a resumed sweep passes over it without compiling)."""
   step = latest_step(workdir)
+  return (step is not None and step >= config.train.total_actions and same_config(workdir, config)
+          and (workdir / 'eval_summary.json').is_file())
+
+
+def same_config(workdir: pathlib.Path, config: Config) -> bool:
+  """Whether a run's config.json is this very config."""
   try:
     saved = json.loads((workdir / 'config.json').read_text())
   except (OSError, json.JSONDecodeError):
     return False
-  same = saved == json.loads(json.dumps(config_lib.to_dict(config)))  # tuples as JSON lists
-  return (step is not None and step >= config.train.total_actions and same
-          and (workdir / 'eval_summary.json').is_file())
+  return saved == json.loads(json.dumps(config_lib.to_dict(config)))  # tuples as JSON lists
 
 
 def _save(checkpoints: Checkpoints, step: int, state, meta: dict) -> None:

@@ -304,6 +304,22 @@ def test_sweep_of_methods_and_seeds_trains_evaluates_and_aggregates(tmp_path, ca
   with pytest.raises(SystemExit):  # a sweep and a single run at once
     train_cli.main(['--config', TINY, '--workdir', str(sweep), '--methods', 'mvcoba',
                     '--method', 'vpg'])
+  # Resumed after a stop that caught one run before its first checkpoint: the finished runs
+  # are passed over and that one starts again; a run of another config is not replaced unasked.
+  shutil.rmtree(sweep / 'mvcoba-s1' / 'checkpoints')
+  (sweep / 'mvcoba-s1' / 'eval_summary.json').unlink()
+  again = mvcoba_jax.sweep(resolve(TINY, ['train.total_actions=4']), sweep, resume=True,
+                           methods=['mvcoba', 'grasp_only'], seeds=[0, 1], eval_actions=1)
+  assert [w.name for w, r in again.items() if r is not None] == ['mvcoba-s1']
+  assert int(again[sweep / 'mvcoba-s1'].state.actions) == 4
+  assert 'stopped before its first checkpoint: starting it again' in capsys.readouterr().out
+  other = sweep / 'grasp_only-s1'
+  shutil.rmtree(other / 'checkpoints')
+  saved = json.loads((other / 'config.json').read_text())
+  (other / 'config.json').write_text(json.dumps(saved | {'train': saved['train'] | {'gamma': 0.1}}))
+  with pytest.raises(mvcoba_jax.TrainError, match='grasp_only-s1 holds results of an earlier'):
+    mvcoba_jax.sweep(resolve(TINY, ['train.total_actions=4']), sweep, resume=True,
+                     methods=['grasp_only'], seeds=[0, 1], eval_actions=1)
 
 
 def test_reproduction_trains_evaluates_and_sets_ours_beside_the_paper(tmp_path, capsys):
