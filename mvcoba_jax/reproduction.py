@@ -21,8 +21,8 @@ from mvcoba_jax.config import Config, ConfigError, validate
 from mvcoba_jax.evaluation import paper
 from mvcoba_jax.evaluation.protocols import PROTOCOLS as PROTOCOLS_BY_NAME
 from mvcoba_jax.evaluation.report import write_whole
-from mvcoba_jax.learner.checkpoint import holds_checkpoint
 from mvcoba_jax.learner.run_log import plot_sweep
+from mvcoba_jax.learner.train import started, sweep_runs
 from mvcoba_jax.sim.scenarios import ScenarioError
 from mvcoba_jax.suites import suite_files
 
@@ -84,10 +84,11 @@ def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
   say(f'{trainings} trainings of {actions} actions, then {trainings} policies x {cases} cases x '
       f'{runs} runs: expected about {expected / 60:.0f} min on a 2-core CPU', flush=True)
   start = time.perf_counter()
-  resume = workdir.is_dir() and any(holds_checkpoint(p) for p in workdir.iterdir())
-  dirs = [run for method in methods  # each method its own recipe: a sweep of its seeds
-          for run in api.sweep(recipes[method], workdir, methods=[method], seeds=seeds,
-                               resume=resume, progress=progress)]
+  dirs = []
+  for method in methods:  # each method its own recipe: a sweep of its seeds, resumed if started
+    runs = sweep_runs(recipes[method], workdir, [method], seeds)
+    dirs += api.sweep(recipes[method], workdir, methods=[method], seeds=seeds,
+                      resume=any(started(r, c) for r, c in runs.items()), progress=progress)
   plot_sweep(dirs, config.train.curve_window, workdir)
   reports, eval_s = {}, 0.0
   for protocol in protocols:

@@ -251,7 +251,7 @@ def sweep(config: Config, workdir, *, methods=None, seeds=None, resume: bool = F
   `resume` passes over a run trained to the end with this very config (None in the result),
   continues one with a checkpoint and starts the others, again where one of this config was
   stopped before its first checkpoint (its logs replaced: they hold no work to keep); it is
-  refused when no run holds a checkpoint (a mistyped folder). `mvcoba_jax.evaluate` of the runs'
+  refused when no run of the sweep was started (`started`: a mistyped folder). `mvcoba_jax.evaluate` of the runs'
   folders then gives each method's interval over the seeds.
   """
   call = 'mvcoba_jax.sweep'
@@ -266,8 +266,9 @@ def sweep(config: Config, workdir, *, methods=None, seeds=None, resume: bool = F
     runs = sweep_runs(config, workdir, methods, seeds)
   except config_lib.ConfigError as e:
     raise TrainError(str(e)) from None
-  if resume and not any(holds_checkpoint(w) for w in runs):
-    raise TrainError(f'resume: no run of the sweep in {workdir} holds a checkpoint')
+  if resume and not any(started(w, c) for w, c in runs.items()):
+    raise TrainError(f'resume: no run of the sweep in {workdir} was started (none holds a '
+                     'checkpoint or its config.json)')
   say = print if progress else (lambda *a, **k: None)
   results = {}
   for i, (run, run_config) in enumerate(runs.items()):
@@ -294,6 +295,12 @@ def finished(workdir: pathlib.Path, config: Config) -> bool:
   step = latest_step(workdir)
   return (step is not None and step >= config.train.total_actions and same_config(workdir, config)
           and (workdir / 'eval_summary.json').is_file())
+
+
+def started(workdir: pathlib.Path, config: Config) -> bool:
+  """Whether `resume` has something of this run to take up: a checkpoint, or a start of this
+  very config stopped before its first checkpoint."""
+  return holds_checkpoint(workdir) or same_config(workdir, config)
 
 
 def same_config(workdir: pathlib.Path, config: Config) -> bool:
