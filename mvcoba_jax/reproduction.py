@@ -86,9 +86,9 @@ def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
   start = time.perf_counter()
   dirs = []
   for method in methods:  # each method its own recipe: a sweep of its seeds, resumed if started
-    runs = sweep_runs(recipes[method], workdir, [method], seeds)
+    planned = sweep_runs(recipes[method], workdir, [method], seeds)
     dirs += api.sweep(recipes[method], workdir, methods=[method], seeds=seeds,
-                      resume=any(started(r, c) for r, c in runs.items()), progress=progress)
+                      resume=any(started(r, c) for r, c in planned.items()), progress=progress)
   plot_sweep(dirs, config.train.curve_window, workdir)
   reports, eval_s = {}, 0.0
   for protocol in protocols:

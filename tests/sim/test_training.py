@@ -348,6 +348,13 @@ def test_reproduction_trains_evaluates_and_sets_ours_beside_the_paper(tmp_path, 
   assert printed.count('finished already') == 2 and printed.count('kept from') == 4
   assert [json.loads((folder / 'results.json').read_text())
           for folder in (out, out / 'online')] == results
+  # A method added later (or one not reached when a call stopped) trains beside the finished.
+  assert reproduce_cli.main(['--config', TINY, '--methods', 'grasp_only', 'mvcoba', '--seeds', '0',
+                             '--actions', '4', '--runs', '1', '--max-actions', '2',
+                             '--suites', 'occluded', '--workdir', str(tmp_path / 'sweep'),
+                             '--out', str(out), '--protocols', 'frozen']) == 0
+  assert capsys.readouterr().out.count('finished already') == 1
+  assert '| MV-COBA (mvcoba) | 1 |' in (out / 'comparison.md').read_text()
 
 
 AUTHORS_RECIPE = ['train.failed_grasp_reward=0', 'train.no_change_push_reward=-1',
