@@ -320,6 +320,9 @@ def test_sweep_of_methods_and_seeds_trains_evaluates_and_aggregates(tmp_path, ca
   with pytest.raises(mvcoba_jax.TrainError, match='grasp_only-s1 holds results of an earlier'):
     mvcoba_jax.sweep(resolve(TINY, ['train.total_actions=4']), sweep, resume=True,
                      methods=['grasp_only'], seeds=[0, 1], eval_actions=1)
+  with pytest.raises(mvcoba_jax.TrainError, match='no run of the sweep in .*typo was started'):
+    mvcoba_jax.sweep(resolve(TINY, ['train.total_actions=4']), tmp_path / 'typo', resume=True,
+                     methods=['grasp_only'], seeds=[0, 1], eval_actions=1)
 
 
 def test_reproduction_trains_evaluates_and_sets_ours_beside_the_paper(tmp_path, capsys):
