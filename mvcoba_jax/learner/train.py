@@ -251,8 +251,8 @@ def sweep(config: Config, workdir, *, methods=None, seeds=None, resume: bool = F
   `resume` passes over a run trained to the end with this very config (None in the result),
   continues one with a checkpoint and starts the others, again where one of this config was
   stopped before its first checkpoint (its logs replaced: they hold no work to keep); it is
-  refused when no run of the sweep was started (`started`: a mistyped folder). `mvcoba_jax.evaluate` of the runs'
-  folders then gives each method's interval over the seeds.
+  refused when no run of the sweep was started (`started`: a mistyped folder).
+  `mvcoba_jax.evaluate` of the runs' folders then gives each method's interval over the seeds.
   """
   call = 'mvcoba_jax.sweep'
   config, workdir = arguments.config(call, config), arguments.path(call, 'workdir', workdir)
