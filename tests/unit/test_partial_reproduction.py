@@ -9,20 +9,14 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / 'experiments'))
 import partial_reproduction  # noqa: E402
 from mvcoba_jax.evaluation.report import ResultsError  # noqa: E402
-
-
-def _row(successes: list[int]) -> dict:
-  """One policy's row: per case, one run of 4 grasps of 3 objects."""
-  run = lambda s: {'actions': 4, 'grasp_attempts': 4, 'grasp_successes': s, 'objects': 3,
-                   'picked': min(s, 3), 'lost': 0, 'completed': s >= 3, 'repeated_failures': 0}
-  return {'runs': {f'case-{i:02d}': [run(s)] for i, s in enumerate(successes)}}
+from tests.helpers import logged_row  # noqa: E402
 
 
 def test_only_suites_with_every_row_land(tmp_path):
   """random holds both seeds of two methods; ordered only one row so far: it is left out."""
-  rows = {f'{m} ({m}-s{s})': _row([4 - s, 3]) for m in ('mvcoba', 'vpg') for s in (0, 1)}
+  rows = {f'{m} ({m}-s{s})': logged_row([4 - s, 3]) for m in ('mvcoba', 'vpg') for s in (0, 1)}
   (tmp_path / 'results.json').write_text(json.dumps(
-      {'random': rows, 'ordered': {'mvcoba (mvcoba-s0)': _row([4])}}))
+      {'random': rows, 'ordered': {'mvcoba (mvcoba-s0)': logged_row([4])}}))
   text = partial_reproduction.finished_part(str(tmp_path), rows=4)
   assert '### random' in text and 'ordered' not in text
   # seed 0: (100 + 75) / 2, seed 1: (75 + 75) / 2 -> 81.25 over both

@@ -7,15 +7,13 @@ import sys
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / 'experiments'))
 import recipe_table  # noqa: E402
+from tests.helpers import logged_row  # noqa: E402
 
 
 def _evaluation(folder: pathlib.Path, suite: str, successes: list[int]):
   """A finished evaluation of one policy: per case, one run of 4 grasps of 3 objects."""
-  run = lambda s: {'actions': 4, 'grasp_attempts': 4, 'grasp_successes': s, 'objects': 3,
-                   'picked': min(s, 3), 'lost': 0, 'completed': s >= 3, 'repeated_failures': 0}
-  runs = {f'case-{i:02d}': [run(s)] for i, s in enumerate(successes)}
   folder.mkdir(parents=True)
-  (folder / 'results.json').write_text(json.dumps({suite: {'mvcoba': {'runs': runs}}}))
+  (folder / 'results.json').write_text(json.dumps({suite: {'mvcoba': logged_row(successes)}}))
   (folder / 'done').write_text('')
 
 
