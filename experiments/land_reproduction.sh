@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Lands an mvcoba-reproduce as its protocols finish: the tables of each finished protocol (its
-# comparison.md written) into docs/results/reproduction, the tables of an earlier training into
+# comparison.md written) into docs/results/reproduction (with online/difference.md, each
+# network's online scores less its frozen ones: experiments/protocol_difference.py), the tables of an earlier training into
 # docs/results/archive/reproduction-COMMIT (the commit that landed them), and seed 0 of every
 # method but MV-COBA exported to pretrained/METHOD with its figures under each landed protocol and
 # the commit that trained it (params.npz and model.json: the ONNX graph is one mvcoba-export
@@ -21,6 +22,7 @@ find "$tables" -maxdepth 1 -type f ! -name '.*' -exec cp {} "$dest"/ \;
 results=("$dest/results.json")
 if [ -f "$tables/online/comparison.md" ]; then
   mkdir -p "$dest/online" && cp "$tables"/online/* "$dest/online/"
+  python experiments/protocol_difference.py "$dest" > "$dest/online/difference.md"
   results+=("$dest/online/results.json")
 fi
 echo "$commit" > "$dest/trained-at"
