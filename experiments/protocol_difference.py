@@ -4,7 +4,7 @@ frozen score of the same trained network, with Student's t interval over those p
 differences (paired: the seed's luck, shared by both protocols, cancels), and what the online
 protocol's evaluation took against the frozen one's.
 
-    python experiments/protocol_difference.py TABLES_DIR > protocols.md   # TABLES_DIR/online too
+    python experiments/protocol_difference.py TABLES_DIR [--suites random ...] > difference.md
 """
 from __future__ import annotations
 
@@ -73,6 +73,8 @@ def markdown(diffs: dict) -> str:
 def main() -> int:
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('tables', help="the reproduction's --out folder (online results in online/)")
+  parser.add_argument('--suites', nargs='+', help='only these suites (default: every suite both '
+                      'protocols hold)')
   args = parser.parse_args()
   tables = pathlib.Path(args.tables)
   try:
@@ -80,6 +82,12 @@ def main() -> int:
     online = report.read_results(tables / 'online' / 'results.json', ' of the online protocol')
   except report.ResultsError as e:
     sys.exit(f'protocol_difference: {e}')
+  if args.suites:
+    missing = [s for s in args.suites if s not in frozen or s not in online]
+    if missing:
+      sys.exit(f'protocol_difference: {", ".join(missing)}: not in both protocols\' results '
+               f'(frozen: {", ".join(frozen)}; online: {", ".join(online)})')
+    frozen = {suite: rows for suite, rows in frozen.items() if suite in args.suites}
   print(markdown(differences(frozen, online)))
   return 0
 

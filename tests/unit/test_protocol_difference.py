@@ -54,3 +54,6 @@ def test_the_command_reads_both_protocols_and_names_a_missing_file(tmp_path, mon
   (tmp_path / 'online' / 'results.json').write_text(json.dumps(online))
   assert protocol_difference.main() == 0
   assert '| VPG (vpg) | 2 | - | - | - | - | 2.00 |' in capsys.readouterr().out
+  monkeypatch.setattr(sys, 'argv', ['protocol_difference.py', str(tmp_path), '--suites', 'ordered'])
+  with pytest.raises(SystemExit, match=r"ordered: not in both protocols' results \(frozen: random"):
+    protocol_difference.main()
