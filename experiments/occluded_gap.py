@@ -8,7 +8,8 @@ and turns 0-8 degrees land at 0.53-0.58 m and 25-33 degrees, inside training's r
 how many objects each camera sees in them (`suites.visibility`), the evaluation of the policies
 on all four (`api.evaluate`, frozen, resumable), and a table with intervals over training seeds.
 
-  python experiments/occluded_gap.py --checkpoints runs/mvcoba-s0 ... runs/mvcoba-s4 --out OUT
+  python experiments/occluded_gap.py --checkpoints runs/mvcoba-s0 ... runs/mvcoba-s4 --out OUT \
+    [--conditions test training validation none]
 """
 from __future__ import annotations
 
@@ -62,10 +63,13 @@ def without_occluders(text: str) -> str:
                    if not line.split()[:1] == ['occluder']) + '\n'
 
 
-def write_conditions(out: pathlib.Path, cameras_xy, source=SUITES_DIR / 'occluded') -> dict:
-  """Condition -> the folder of its case files under `out`, made from `source`'s cases."""
+def write_conditions(out: pathlib.Path, cameras_xy, names=tuple(CONDITIONS),
+                     source=SUITES_DIR / 'occluded') -> dict:
+  """Condition -> the folder of its case files under `out`, made from `source`'s cases, for
+  the conditions `names`."""
   folders = {}
-  for name, change in CONDITIONS.items():
+  for name in names:
+    change = CONDITIONS[name]
     folder = out / 'cases' / name
     folder.mkdir(parents=True, exist_ok=True)
     for path in sorted(source.glob('*.scn')):
@@ -118,7 +122,7 @@ def table(results: dict, folders: dict, sights: dict) -> str:
           + ' | '.join(label for _, label in METRICS)
           + " | grasp success less none's, paired by seed | grasp success per seed |\n"
           + '|---|---|---|' + '---|' * (len(METRICS) + 2))
-  cases = sorted(sights['test']['per_case'])
+  cases = sorted(sights['none']['per_case'])
   seen_by_some = [c for c in cases if all(s['per_case'][c]['no_camera'] == 0
                                           for s in sights.values())]
   per_case = {name: {c: np.mean([r['cases'][c]['grasp_success']
@@ -141,12 +145,14 @@ def main() -> int:
                       help='work directories (or exports) of one method, one per training seed')
   parser.add_argument('--out', required=True)
   parser.add_argument('--runs', type=int, default=5, help='runs per case')
+  parser.add_argument('--conditions', nargs='+', choices=CONDITIONS, default=list(CONDITIONS),
+                      help='the conditions to evaluate (none, the reference, always)')
   args = parser.parse_args()
   runtime.setup()
   out = pathlib.Path(args.out)
   config = resolve('default')
   cameras_xy = [c.pos[:2] for c in config.scene.cameras]
-  folders = write_conditions(out, cameras_xy)
+  folders = write_conditions(out, cameras_xy, dict.fromkeys(args.conditions + ['none']))
   sights = {name: seen(folder, config) for name, folder in folders.items()}
   (out / 'visibility.json').write_text(json.dumps(sights, indent=1))
   try:

@@ -50,6 +50,11 @@ def test_each_condition_puts_the_occluders_in_its_region(folders):
   assert len(poses(folders['none'])) == 0
 
 
+def test_only_the_named_conditions_are_written(tmp_path):
+  folders = occluded_gap.write_conditions(tmp_path, CAMERAS_XY, ('test', 'none'))
+  assert list(folders) == ['test', 'none'] and not (tmp_path / 'cases' / 'training').exists()
+
+
 def test_the_objects_stay_where_the_shipped_cases_put_them(folders):
   for shipped in sorted((SUITES_DIR / 'occluded').glob('*.scn')):
     objects = read_case(shipped).objects
