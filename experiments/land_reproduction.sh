@@ -3,10 +3,11 @@
 # comparison.md written) into docs/results/reproduction (with online/difference.md, each
 # network's online scores less its frozen ones: experiments/protocol_difference.py), the tables
 # of an earlier training into docs/results/archive/reproduction-COMMIT (the commit that landed
-# them), and seed 0 of every method but MV-COBA exported to pretrained/METHOD with its figures under each landed protocol and
-# the commit that trained it (params.npz and model.json: the ONNX graph is one mvcoba-export
-# away; pretrained/mvcoba is what `mvcoba-train` gives, landed by land_pretrained.sh). Run it
-# again when the online protocol finishes: the same training's tables are refreshed in place.
+# them), and seed 0 of every method but MV-COBA exported to pretrained/METHOD with its figures
+# under each landed protocol and the commit that trained it (params.npz and model.json: the ONNX
+# graph is one mvcoba-export away; pretrained/mvcoba is what `mvcoba-train` gives, landed by
+# land_pretrained.sh). Run it again when the online protocol finishes: the same training's
+# tables are refreshed in place, and the page of its suites so far is removed.
 #   bash experiments/land_reproduction.sh WORKDIR TABLES TRAINED_AT_COMMIT
 set -euo pipefail
 cd "$(dirname "$0")/.."
