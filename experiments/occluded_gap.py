@@ -104,9 +104,9 @@ def interval_rows(results: dict, folders: dict, sights: dict, cases: list[str]) 
     groups = report.training_groups(rows)
     for group, entry in report.seed_intervals(rows).items():
       labels = groups[group]
-      cost = intervals.interval([[rows[label]['cases'][c]['grasp_success']
-                                  - bare[label]['cases'][c]['grasp_success'] for c in cases]
-                                 for label in labels])
+      scores = lambda of: [[of[label]['cases'][c]['grasp_success'] for c in cases]
+                           for label in labels]
+      cost = intervals.paired(scores(rows), scores(bare))
       lines.append(f'| {name} ({group}) | {hidden[0]} / {hidden[1]} | {entry["seeds"]} | '
                    + ' | '.join(report.interval_cell(entry[k]) for k, _ in METRICS)
                    + f' | {report.interval_cell(cost)}'

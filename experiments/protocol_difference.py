@@ -12,8 +12,6 @@ import argparse
 import pathlib
 import sys
 
-import numpy as np
-
 from mvcoba_jax.evaluation import intervals, paper, report
 
 METRICS = (('grasp_success', 'grasp success'), ('completion', 'runs completed'),
@@ -44,11 +42,8 @@ def differences(frozen: dict, online: dict) -> dict:
       entry = {'seeds': len(keys), 'time_ratio': sum(after[k]['wall_s'] for k in keys)
                / sum(before[k]['wall_s'] for k in keys)}
       for metric, _ in METRICS:
-        score = lambda row, c: row['cases'][c][metric]  # None: undefined (results.json)
-        diff = np.array([[score(after[k], c) - score(before[k], c)
-                          if score(after[k], c) is not None and score(before[k], c) is not None
-                          else np.nan for c in cases] for k in keys], np.float64)
-        entry[metric] = intervals.interval(diff) if np.isfinite(diff).all() else None
+        scores = lambda rows: [[rows[k]['cases'][c][metric] for c in cases] for k in keys]
+        entry[metric] = intervals.paired(scores(after), scores(before))
       out.setdefault(suite, {})[method] = entry
   return out
 

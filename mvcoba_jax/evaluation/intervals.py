@@ -43,6 +43,15 @@ def interval(scores, confidence: float = 0.95,
   return point, float(max(point - half, within[0])), float(min(point + half, within[1]))
 
 
+def paired(scores, baseline, confidence: float = 0.95) -> tuple[float, float, float] | None:
+  """`interval` of `scores` less `baseline`, both (seeds, cases) from the same seeds' networks
+  (one network under two conditions): each seed's own difference is the observation, so the
+  seed's luck, shared by both, cancels. None where either is undefined in some cell (NaN, or None
+  as results.json stores it)."""
+  difference = np.array(scores, np.float64) - np.array(baseline, np.float64)
+  return interval(difference, confidence) if np.isfinite(difference).all() else None
+
+
 def separated(a: tuple[float, float, float], b: tuple[float, float, float],
               seeds: tuple[int, int]) -> bool:
   """Whether `a` and `b` (intervals over `seeds` training seeds each) are disjoint with

@@ -40,6 +40,16 @@ def test_degenerate_and_single_seed_scores():
     intervals.interval(np.array([[0.5, np.nan]]))
 
 
+def test_paired_interval_is_over_each_seeds_own_difference():
+  """Seeds far apart in level that each gain 10 and 12 points: the seeds' spread cancels; a cell
+  undefined on either side (None, as results.json stores it) leaves the difference undefined."""
+  before = np.array([[20.0, 40.0], [80.0, 60.0]])
+  half = 12.706205 * math.sqrt(2) / math.sqrt(2)  # t(0.975, 1) * sd(10, 12) / sqrt(2 seeds)
+  assert intervals.paired(before + [[10, 10], [12, 12]], before) == pytest.approx(
+      (11.0, 11.0 - half, 11.0 + half), abs=1e-5)
+  assert intervals.paired([[None, 1.0], [2.0, 3.0]], [[0.0, 0.0], [0.0, 0.0]]) is None
+
+
 def test_interval_covers_the_truth_when_a_seed_effect_is_shared_by_its_cases():
   """1000 simulated experiments of 5 seeds x 12 cases (seed effect sd 8 shared by a seed's
   cases, case effect sd 10, noise sd 3): the nominal 95% interval covers the suite's true mean

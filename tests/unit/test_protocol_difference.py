@@ -21,14 +21,15 @@ def _row(seed: int, scores: list[float], wall_s: float) -> dict:
 def test_each_network_is_paired_with_itself_across_the_protocols():
   """Grasp success: seed 0 gains 10 points online on both cases, seed 1 20 on one and none on
   the other: 10 per seed, so no spread, whatever the seeds' own levels. Completion: seed 0 +10,
-  seed 1 +5. Seed 2 only ran frozen and is left out; online took twice the time."""
+  seed 1 +10 and 0, so +5. Seed 2 only ran frozen and is left out; online took twice the
+  time."""
   frozen = {'random': {'mvcoba (mvcoba-s0)': _row(0, [50, 60], 10),
-                       'mvcoba (mvcoba-s1)': _row(1, [90, 80], 10),
+                       'mvcoba (mvcoba-s1)': _row(1, [70, 80], 10),
                        'mvcoba (mvcoba-s2)': _row(2, [0, 0], 10)},
             'ordered': {'mvcoba (mvcoba-s0)': _row(0, [50], 10)}}
   online = {'random': {'mvcoba (mvcoba-s0) [online]': _row(0, [60, 70], 20),
-                       'mvcoba (mvcoba-s1) [online]': _row(1, [100, 80], 20)}}
-  online['random']['mvcoba (mvcoba-s1) [online]']['cases']['case-0']['grasp_success'] = 110
+                       'mvcoba (mvcoba-s1) [online]': _row(1, [90, 80], 20)}}
+  online['random']['mvcoba (mvcoba-s1) [online]']['cases']['case-0']['completion'] = 80
   diffs = protocol_difference.differences(frozen, online)
   assert list(diffs) == ['random']  # ordered: no online rows yet
   entry = diffs['random']['mvcoba']
