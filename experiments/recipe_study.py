@@ -47,6 +47,7 @@ VALIDATION = ROOT / 'docs' / 'results' / 'validation'
 PAPER_TEXT = ['--config', 'paper_text']
 NOFRESH = ['--config', 'authors', '--set', 'train.fresh_in_batch=false']
 OCCLUDED = NOFRESH + ['--set', 'env.occluded_share=0.25']  # the default preset at 3000 actions
+SCREEN_BASE = ['--config', 'default', '--set', 'train.total_actions=3000']  # preset_default
 VARIANTS = {
     'paper_text': PAPER_TEXT,
     'targets': PAPER_TEXT + ['--set', 'train.bootstrap_no_change=false',
@@ -85,6 +86,14 @@ VARIANTS = {
                        '--set', 'num_envs=64', '--set', 'train.replay_ratio=1'],
     'batch_64': ['--config', 'default', '--set', 'train.total_actions=3000',
                  '--set', 'num_envs=64'],
+    # Issue 65's candidates, each from preset_default: CPG's suppression in MV-COBA's change
+    # rule, a push after a failed grasp, unseen cells filled from the other view, and all three.
+    'suppress': SCREEN_BASE + ['--set', 'network.suppress=true'],
+    'failed_grasp_push': SCREEN_BASE + ['--set', 'perception.failed_grasp_changes=false'],
+    'fill_unseen': SCREEN_BASE + ['--set', 'perception.fill_unseen=true'],
+    'suppress_push_fill': SCREEN_BASE + ['--set', 'network.suppress=true',
+                                         '--set', 'perception.failed_grasp_changes=false',
+                                         '--set', 'perception.fill_unseen=true'],
 }
 # variant -> the variant whose finished run it resumes to more actions. The same as training
 # that long in one go: nothing in the recipe reads the total (constant learning rate, exploration

@@ -51,7 +51,7 @@ def onnx_model(config: Config, model: networks.QNetwork):
   graphdef, params = nnx.split(model)
   side, views = perception.grid_size(config), len(config.scene.cameras)
   method = model.method
-  outputs = output_names(method)
+  outputs = output_names(agent.suppresses(method, config))
 
   def forward(color, depth):
     q = nnx.merge(graphdef, params)(color, depth)
@@ -65,14 +65,25 @@ def onnx_model(config: Config, model: networks.QNetwork):
                  input_names=['color', 'depth'], output_names=list(outputs))
 
 
-def output_names(method: methods.Method) -> tuple[str, ...]:
-  """The graph's outputs: Q maps, and for a suppressing method the scores its rule compares."""
-  return ('q', 'score') if method.suppress else ('q',)
+def deploy_unsupported(config: Config) -> str | None:
+  """The first setting of `config` that model.json cannot carry to a runtime outside JAX, or
+  None: the deploy path builds each view's heightmap alone and observes change as the paper."""
+  if config.perception.fill_unseen:
+    return 'perception.fill_unseen=true'
+  if not config.perception.failed_grasp_changes:
+    return 'perception.failed_grasp_changes=false'
+  return None
 
 
-def action_rule(method: methods.Method) -> dict:
-  """The method's `Rule`, in words and by the name a runtime outside JAX applies it by."""
-  maps = output_names(method)[-1]
+def output_names(suppress: bool) -> tuple[str, ...]:
+  """The graph's outputs: Q maps, and where the rule suppresses the scores it compares."""
+  return ('q', 'score') if suppress else ('q',)
+
+
+def action_rule(method: methods.Method, suppress: bool = False) -> dict:
+  """The method's `Rule`, in words and by the name a runtime outside JAX applies it by; its
+  maps are the scores where it suppresses (`agent.suppresses`)."""
+  maps = output_names(suppress or method.suppress)[-1]
   return {'name': method.rule.name, 'maps': maps, 'primitive': method.rule.text,
           'pixel': (f'argmax of that primitive\'s {maps} over (rotation, row, col), flattened in '
                     'that order; the first maximum wins'),
@@ -85,6 +96,7 @@ def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir,
   is `figures`' answer."""
   side, k = perception.grid_size(config), config.env.num_rotations
   method = methods.get(config.network.method)
+  suppress = agent.suppresses(method, config)
   views, num_views = method.views, len(config.scene.cameras)
   res, half = config.perception.heightmap_resolution, config.scene.workspace_half
   return {
@@ -101,7 +113,7 @@ def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir,
                  'naming': 'the Flax NNX state path joined by "/" (list indices as numbers)'},
       'primitives': {'push': PUSH, 'grasp': GRASP},
       'no_action': networks.NO_ACTION,
-      'action_rule': action_rule(method),
+      'action_rule': action_rule(method, suppress),
       'rotations': {'num_rotations': k,
                     'angles_rad': rotation_angle(np.arange(k), k).tolist(),
                     'formula': 'angle(k) = k * 2 * pi / num_rotations',
@@ -134,12 +146,12 @@ def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir,
               {'name': 'score', 'shape': [1, 2, k, side, side], 'dtype': 'float32',
                'meaning': 'what the action rule compares: (Q + 0.1) x the suppression factor '
                           'of each action (CPG), no_action where suppressed; Q where nothing '
-                          'is allowed'}] if method.suppress else []),
+                          'is allowed'}] if suppress else []),
           'in_graph': ['views_used selection'] + (
               ['fusion of the views into one, the highest point per cell'] if method.fuse else []) + [
                   'rotation of the inputs by -angle(k) for each k (bilinear, zero fill)',
                   'input normalisation', 'the FCNs', 'rotation of the Q maps back by +angle(k)'
-              ] + (['suppression of actions that cannot act (score)'] if method.suppress else []),
+              ] + (['suppression of actions that cannot act (score)'] if suppress else []),
           'outside_graph': ['the action rule and the argmax (action_rule)',
                             'pixel -> world (pixel_to_world)']},
   }
@@ -193,6 +205,10 @@ def export(workdir, out, results=(), commit: str | None = None,
   except folders.FolderError as e:
     raise PolicyError(str(e)) from None
   config, model, step = load(workdir)
+  unsupported = deploy_unsupported(config)
+  if unsupported:
+    raise PolicyError(f'{workdir}: trained with {unsupported}, which the deploy path does not '
+                      'reproduce yet; it cannot be exported')
   measured = figures(results, model)
   flat = flat_params(model)
   proto = onnx_model(config, model)

@@ -24,19 +24,21 @@ class Rule:
   pick: Callable  # (changed (B,) bool, best (B, 2) each primitive's max) -> (B,) int32 primitive
   future_over_both: bool  # the target's max is over both primitives' maps, else the one at s'
   explores_primitive: bool  # a random action draws its primitive too, else keeps the rule's
+  compares_primitives: bool  # `pick` reads the maps' maxima, else the primitive is given
 
 
 # MV-COBA's change observation: `changed` is True also before the first action of an episode.
 CHANGE = Rule('change', 'grasp if the previous action changed the scene (also before the first '
               'action of an episode), else push',
               lambda changed, best: jnp.where(changed, GRASP, PUSH).astype(jnp.int32),
-              future_over_both=False, explores_primitive=False)
+              future_over_both=False, explores_primitive=False, compares_primitives=False)
 MAX_Q = Rule('max_q', 'the primitive whose Q map holds the larger maximum (ties: push)',
              lambda changed, best: jnp.argmax(best, axis=-1).astype(jnp.int32),
-             future_over_both=True, explores_primitive=True)
+             future_over_both=True, explores_primitive=True, compares_primitives=True)
 ALWAYS_GRASP = Rule('grasp', 'always grasp',
                     lambda changed, best: jnp.full(changed.shape, GRASP, jnp.int32),
-                    future_over_both=False, explores_primitive=False)
+                    future_over_both=False, explores_primitive=False,
+                    compares_primitives=False)
 RULES = {rule.name: rule for rule in (CHANGE, MAX_Q, ALWAYS_GRASP)}
 
 

@@ -33,6 +33,13 @@ class PerceptionConfig:
   change_area: float = 300 * 0.002 ** 2
   change_min: float = 0.01
   change_max: float = 0.3
+  # Beyond the paper, off in its rule: a grasp that held nothing counts as no change whatever it
+  # moved, so the change rule pushes next instead of grasping again at the nudged pile.
+  failed_grasp_changes: bool = True
+  # Beyond the paper: each view's unseen cells (an occluder's shadow) take the highest point the
+  # other views saw there, and its colour, before anything reads the heightmaps; `seen` stays
+  # what each camera saw.
+  fill_unseen: bool = False
 
   def __post_init__(self):
     check(self, 'perception.', {'heightmap_resolution': Between(0.0005, 0.05),
@@ -57,6 +64,10 @@ class NetworkConfig:
   # trunk's first n - 1 blocks. At least one block runs per rotation, or every turn would score
   # alike. Each FCN's maps are then turned back at the stem's resolution and upsampled.
   shared_stages: int = 0
+  # The rule compares CPG's suppressed scores (`learner/suppression.py`), as a method that
+  # suppresses always does: beyond MV-COBA, whose change rule then picks its primitive's best
+  # allowed action.
+  suppress: bool = False
 
   def __post_init__(self):
     check(self, 'network.', {'trunk': TRUNKS, 'stem_patch': Between(1, 16),

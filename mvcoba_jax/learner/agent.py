@@ -26,13 +26,20 @@ class PixelAction:
   col: jnp.ndarray  # (B,) int32
 
 
+def suppresses(method: Method, config: Config) -> bool:
+  """Whether the rule compares suppressed scores: a suppressing method (CPG), or any method with
+  `network.suppress`."""
+  return method.suppress or config.network.suppress
+
+
 def rule_maps(q, depth, method: Method, config: Config):
   """The maps (B, 2, K, R, R) the method's rule compares and takes the argmax of: its Q maps
-  `q` of every rotation, or for a suppressing method (CPG) `suppression.scores` of them."""
-  if not method.suppress:
+  `q` of every rotation, or where it `suppresses` `suppression.scores` of them."""
+  if not suppresses(method, config):
     return q
   return suppression.scores(q, surface_height(depth, method.views),
-                            config.perception.heightmap_resolution)
+                            config.perception.heightmap_resolution,
+                            per_primitive=not method.rule.compares_primitives)
 
 
 def greedy_actions(q, changed, method: Method) -> PixelAction:

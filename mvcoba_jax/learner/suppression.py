@@ -77,12 +77,13 @@ def factors(height, num_rotations: int, resolution: float):
   return jnp.clip(jnp.moveaxis(maps, -1, 1), 0.0, 1.0) * masks
 
 
-def scores(q, height, resolution: float):
+def scores(q, height, resolution: float, per_primitive: bool = False):
   """The maps CPG's rule compares: (Q + 0.1) x factor where the factor allows, NO_ACTION where
-  it suppresses; for a state with no allowed action at all, its raw Q maps. `q` (B, 2, K, R, R)
-  holds every rotation in order."""
+  it suppresses; for a state with no allowed action at all, its raw Q maps (with
+  `per_primitive`, for a rule that is given its primitive: a primitive with no allowed action
+  keeps its raw Q map). `q` (B, 2, K, R, R) holds every rotation in order."""
   f = factors(height, q.shape[2], resolution)
   allowed = f > 0
   weighted = jnp.where(allowed, (q + Q_OFFSET) * f, NO_ACTION)
-  anything = jnp.any(allowed, axis=(1, 2, 3, 4), keepdims=True)
+  anything = jnp.any(allowed, axis=(2, 3, 4) if per_primitive else (1, 2, 3, 4), keepdims=True)
   return jnp.where(anything, weighted, q)

@@ -79,6 +79,8 @@ def step(env: Tabletop, views: tuple[int, ...], state: State, action: agent.Pixe
   healthy = info.healthy
   changed = perception.change_observed(obs, next_obs, info.grasp_success,
                                        config.perception) & healthy
+  if not config.perception.failed_grasp_changes:
+    changed &= (action.primitive != agent.GRASP) | info.grasp_success
   reward = jnp.where(healthy, agent.reward(action.primitive, info.grasp_success, changed, train),
                      0.0)
   failures = jnp.where(agent.failed(action.primitive, info.grasp_success, changed),

@@ -41,7 +41,8 @@ def test_a_new_rule_is_one_object_the_agent_asks():
   """A rule that always pushes and whose target looks at both primitives: acting, the target's
   max and model.json follow it without a line elsewhere."""
   push = methods.Rule('push', 'always push', lambda changed, best: jnp.zeros_like(changed, jnp.int32),
-                      future_over_both=True, explores_primitive=False)
+                      future_over_both=True, explores_primitive=False,
+                      compares_primitives=False)
   method = methods.Method('toy_pusher', fcns=(methods.Fcn((PUSH, GRASP), (0,)),), rule=push)
   q = jnp.zeros((2, 2, 1, 4, 4)).at[:, GRASP, 0, 1, 2].set(5.0).at[:, PUSH, 0, 3, 0].set(1.0)
   action = agent.greedy_actions(q, jnp.array([True, False]), method)
