@@ -13,11 +13,14 @@ most of the workspace, slots 1 and 2 (10 x 10 cm) a part.
 | training | 0.53-0.60 | 23-40 | 0.78-0.92 / 0.72-0.86 | -0.04-0.04 / 0.00-0.05 |
 | test | 0.45-0.50 | 0-8 | 0.78-0.92 / 0.72-0.86 | -0.04-0.04 / 0.00-0.05 |
 | validation | 0.37-0.42 | 0-8 | 0.78-0.92 / 0.72-0.86 | -0.04-0.04 / 0.00-0.05 |
+| validation, high | 0.63-0.66 | 0-8 | 0.78-0.92 / 0.72-0.86 | -0.04-0.04 / 0.00-0.05 |
 
 Every training pose is at least `MARGIN_M` away in height and `MARGIN_DEG` in yaw from every test
 pose: both margins at once (tests/unit/test_occluders.py checks draws against every occluder of
 the shipped suites). Validation poses are as far from training's in both, and `MARGIN_M` in
-height from the test's.
+height from the test's. The validation region hides little (its occluders stand low, below most
+of a camera's rays); the high one, above training's and near the cameras' height, hides as much
+as the test's, for a validation occluded suite as hard as the test's.
 A box is symmetric under a half turn, so yaws compare modulo 180 degrees.
 """
 from __future__ import annotations
@@ -46,6 +49,7 @@ class Region:
 TRAINING = Region(height=(0.53, 0.60), yaw=(23.0, 40.0))
 TEST = Region(height=(0.45, 0.50), yaw=(0.0, 8.0))
 VALIDATION = Region(height=(0.37, 0.42), yaw=(0.0, 8.0))
+VALIDATION_HIGH = Region(height=(0.63, 0.66), yaw=(0.0, 8.0))
 
 
 def pose(region: Region, camera_xy, part, u):

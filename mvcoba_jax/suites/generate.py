@@ -20,7 +20,8 @@ Every case also holds one isolated object as a readiness check, as VPG and the p
 writes validation suites drawn apart from the shipped suites (val-random: heaps from other seeds;
 val-ordered: packed templates no shipped case holds, a brick bond, a hexagonal packing, staggered
 tall boxes; val-occluded: occluders from `sim/occluders.py`'s validation region, which neither
-training nor the tests use) for choosing training settings, never the shipped suites results
+training nor the tests use; val-occluded-high: from its high validation region, which hides as
+much as the test's) for choosing training settings, never the shipped suites results
 are reported on. tests/unit/test_validation_cases.py checks that they share no layout
 (`suites/similarity.py`) and no occluder pose with the shipped suites.
 """
@@ -245,6 +246,7 @@ def isolated_cases() -> list[str]:
 
 
 VALIDATION_SEED = 10_000  # validation cases draw from seeds apart from the shipped suites
+VALIDATION_HIGH_SEED = VALIDATION_SEED + 700  # val-occluded-high's draws, apart from val-occluded's
 
 
 def turned(parts, angle_deg: float, x0: float, y0: float, start_colour: int = 0) -> list[str]:
@@ -326,17 +328,21 @@ def set_apart(rng) -> str:
 
 
 OCCLUDER_KINDS = ('whole', 'pair', 'whole_and_part')
+# At the high validation region's heights a partial occluder passes over every ray to the table:
+# each case there has a whole one.
+HIGH_KINDS = ('whole', 'whole_and_part')
 
 
-def drawn_occluded_case(region: occluders.Region, seed: int, index: int) -> str:
-  """Objects set apart (`set_apart`) under occluders drawn from `region`, by `index`: occluder 0
-  hiding all or most of the workspace from one camera ('whole'), occluders 1 and 2 each a part
-  from one camera each ('pair'), or occluder 0 before one camera and occluder 1 before the other
-  ('whole_and_part'); the first camera alternates with `index`."""
+def drawn_occluded_case(region: occluders.Region, seed: int, index: int,
+                        kinds: tuple[str, ...] = OCCLUDER_KINDS) -> str:
+  """Objects set apart (`set_apart`) under occluders drawn from `region`, of the kind `index`
+  picks from `kinds`: occluder 0 hiding all or most of the workspace from one camera ('whole'),
+  occluders 1 and 2 each a part from one camera each ('pair'), or occluder 0 before one camera
+  and occluder 1 before the other ('whole_and_part'); the first camera alternates with `index`."""
   rng = np.random.default_rng(seed)
   text = set_apart(rng)
-  kind = OCCLUDER_KINDS[index % len(OCCLUDER_KINDS)]
-  first = index // len(OCCLUDER_KINDS) % 2
+  kind = kinds[index % len(kinds)]
+  first = index // len(kinds) % 2
   cameras_xy = [c.pos[:2] for c in resolve('default').scene.cameras]
   slots = {'whole': [(0, first, False)], 'pair': [(1, 0, True), (2, 1, True)],
            'whole_and_part': [(0, first, False), (1, 1 - first, True)]}[kind]
@@ -375,6 +381,9 @@ def validation_suites(cases: int = 6) -> dict[str, list[str]]:
       'val-occluded': [passing(lambda tries, i=i: drawn_occluded_case(
           occluders.VALIDATION, VALIDATION_SEED + 500 + 100 * tries + i, i), seen_by_one=True)
                        for i in range(cases)],
+      'val-occluded-high': [passing(lambda tries, i=i: drawn_occluded_case(
+          occluders.VALIDATION_HIGH, VALIDATION_HIGH_SEED + 100 * tries + i, i, HIGH_KINDS),
+                                    seen_by_one=True) for i in range(cases)],
   }
 
 
@@ -391,8 +400,8 @@ def suites() -> dict[str, list[str]]:
 def main(argv=None):
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--validation', metavar='DIR',
-                      help='write the validation suites (val-random, val-ordered, val-occluded) '
-                           'under DIR instead of the shipped suites')
+                      help='write the validation suites (val-random, val-ordered, val-occluded, '
+                           'val-occluded-high) under DIR instead of the shipped suites')
   parser.add_argument('--cases', type=int, default=6, help='validation cases per suite')
   args = parser.parse_args(argv)
   runtime.setup()

@@ -83,6 +83,23 @@ def test_full_occluder_hides_everything_from_camera_1_only(env, observe, tmp_pat
   assert visible_slots(env, obs, 1) == {0, 1}
 
 
+def test_fill_unseen_gives_a_blinded_view_what_the_other_saw(tmp_path):
+  """`perception.fill_unseen`: camera 1 fully blocked, its heightmaps take camera 2's points
+  (heights and colours) wherever camera 2 saw, so both cubes stand in both views; `seen` still
+  says what each camera saw, and camera 2's own maps are unchanged."""
+  case = read_case(scenario(tmp_path, 'cube blue 0.1 0.12 0\ncube green -0.1 -0.12 0\n'
+                                      'occluder 0 0.3 0 0.49 0\n'))
+  plain, filled = (jax.tree.map(lambda x: np.asarray(x[0]), observer(env)([case_to_layout(
+      case, env)])) for env in (make_env('tiny', 'native'),
+                                make_env('tiny', 'native', 'perception.fill_unseen=true')))
+  assert not filled.seen[0].any() and (filled.seen == plain.seen).all()
+  seen = plain.seen[1]
+  np.testing.assert_array_equal(filled.depth[0][seen], plain.depth[1][seen])
+  np.testing.assert_array_equal(filled.color[0][seen], plain.color[1][seen])
+  np.testing.assert_array_equal(filled.depth[1], plain.depth[1])
+  assert (filled.depth[0] > 0.04).sum() > 20 and not (plain.depth[0] > 0).any()
+
+
 def test_mvp_fuses_its_viewpoints_past_a_blocked_one(tmp_path):
   """MVP's four camera poses: with the first fully blocked, the fused heightmap its network reads
   still holds both cubes at their height."""

@@ -50,3 +50,24 @@ def test_rewards_failures_and_episode_ends():
   np.testing.assert_array_equal(np.asarray(out.cleared), [True, False, False, False])
   np.testing.assert_array_equal(np.asarray(out.done), [True, True, False, False])
   assert np.asarray(next_obs.depth[0]).max() < 0.005  # the picked cube is gone from view
+
+
+def test_a_failed_grasp_that_moves_blocks_is_no_change_when_so_configured():
+  """Two cubes side by side: a grasp whose fingers land on them fails and moves them, which the
+  paper's rule counts as change (it grasps again); with `perception.failed_grasp_changes` off
+  the same outcome is no change (the rule pushes next). A successful grasp changes either way."""
+  outcomes = {}
+  for setting in ('true', 'false'):
+    env = make_env('tiny', 'native', f'perception.failed_grasp_changes={setting}')
+    res, half = env.config.perception.heightmap_resolution, env.config.scene.workspace_half
+    two_cubes = layout(env, [(CUBE, 0.0, 0.0, 0.0), (CUBE2, 0.026, 0.0, 0.0)])
+    states = jax.jit(jax.vmap(env.reset_from_case))(stack([two_cubes, two_cubes]))
+    rows = [(GRASP, 0, *world_to_pixel(x, 0.0, res, half)) for x in (0.02, 0.03)]
+    action = PixelAction(*(jnp.asarray(c, jnp.int32) for c in zip(*rows)))
+    before = task.State(env=states, obs=task.observe(env, states), changed=jnp.ones(2, bool),
+                        failures=jnp.zeros(2, jnp.int32))
+    _, out = jax.jit(lambda s, a: task.step(env, (0, 1), s, a, env.config.train))(before, action)
+    outcomes[setting] = (np.asarray(out.info.grasp_success).tolist(),
+                         np.asarray(out.changed).tolist(), np.asarray(out.failures).tolist())
+  assert outcomes['true'] == ([False, True], [True, True], [1, 0])
+  assert outcomes['false'] == ([False, True], [False, True], [1, 0])

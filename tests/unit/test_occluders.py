@@ -57,8 +57,9 @@ def test_training_occluders_vary_in_every_coordinate(training):
   assert turn.min() >= 23 - 1e-3 and turn.max() <= 40 + 1e-3 and np.ptp(turn) > 10
 
 
-def test_validation_occluders_stand_apart_from_training_and_test(training, shipped):
-  poses = case_poses(sorted((VALIDATION / 'val-occluded').glob('*.scn')))
+@pytest.mark.parametrize('suite', ['val-occluded', 'val-occluded-high'])
+def test_validation_occluders_stand_apart_from_training_and_test(suite, training, shipped):
+  poses = case_poses(sorted((VALIDATION / suite).glob('*.scn')))
   assert len(poses) >= 6
   distance, turn = occluders.separation(poses, shipped)
   assert distance.min() >= occluders.MARGIN_M, distance.min()

@@ -67,3 +67,41 @@ def test_with_nothing_allowed_the_raw_maps_decide():
   maps = agent.rule_maps(q, empty, methods.get('cpg'), resolve('default'))
   np.testing.assert_array_equal(np.asarray(maps), np.asarray(q))
   assert not np.any(np.asarray(maps) == networks.NO_ACTION)
+
+
+def test_mvcoba_with_suppression_grasps_and_pushes_only_where_allowed():
+  """`network.suppress` in MV-COBA's change rule: after a change it grasps where the fingers
+  land free, after none it pushes with something ahead, over random Q maps and cube clutter
+  seen by both views; without the setting its maps are the raw Q maps."""
+  rng = np.random.default_rng(7)
+  heights = jnp.asarray(np.concatenate([blocks(*rng.integers(5, 95, (6, 2))) for _ in range(2)]))
+  q = jax.random.normal(jax.random.PRNGKey(7), (2, 2, K, SIDE, SIDE))
+  depth = jnp.stack([heights, heights], axis=1)  # two views
+  method, config = methods.get('mvcoba'), resolve('default', ['network.suppress=true'])
+  maps = agent.rule_maps(q, depth, method, config)
+  f = np.asarray(factors(heights))
+  for changed, primitive in ((True, GRASP), (False, PUSH)):
+    action = agent.greedy_actions(maps, jnp.full(2, changed), method)
+    assert (np.asarray(action.primitive) == primitive).all()
+    picked = f[np.arange(2), primitive, np.asarray(action.rotation), np.asarray(action.row),
+               np.asarray(action.col)]
+    assert (picked > 0).all(), picked
+  assert agent.rule_maps(q, depth, method, resolve('default')) is q
+
+
+def test_a_given_primitive_with_nothing_allowed_keeps_its_raw_map():
+  """Blocks over the whole map: no push starts off an edge, a few grasps at the map's border are
+  free. A rule given its primitive (change, after no change: push) then reads the push's raw Q
+  map, never an all-suppressed one whose argmax is a corner; CPG's rule, which compares
+  primitives, keeps the pushes suppressed and so grasps."""
+  height = jnp.full((1, SIDE, SIDE), 0.05)
+  f = np.asarray(factors(height))
+  assert not (f[0, PUSH] > 0).any() and (f[0, GRASP] > 0).any()
+  q = jax.random.normal(jax.random.PRNGKey(1), (1, 2, K, SIDE, SIDE))
+  given = np.asarray(suppression.scores(q, height, RES, per_primitive=True))
+  np.testing.assert_array_equal(given[:, PUSH], np.asarray(q[:, PUSH]))
+  assert (given[:, GRASP] == networks.NO_ACTION).any()
+  compared = np.asarray(suppression.scores(q, height, RES))
+  assert (compared[:, PUSH] == networks.NO_ACTION).all()
+  action = agent.greedy_actions(jnp.asarray(compared), jnp.zeros(1, bool), methods.get('cpg'))
+  assert int(action.primitive[0]) == GRASP

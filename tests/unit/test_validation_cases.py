@@ -12,7 +12,7 @@ from mvcoba_jax.suites import SUITES, SUITES_DIR, generate
 from mvcoba_jax.suites.similarity import largest_rigid_match
 
 VALIDATION = pathlib.Path(__file__).resolve().parents[2] / 'docs' / 'results' / 'validation'
-KINDS = ('val-random', 'val-ordered', 'val-occluded')
+KINDS = ('val-random', 'val-ordered', 'val-occluded', 'val-occluded-high')
 
 
 def files(folder: pathlib.Path):
@@ -32,6 +32,11 @@ def test_validation_files_are_the_generators():
     draws = [generate.drawn_occluded_case(occluders.VALIDATION,
                                           generate.VALIDATION_SEED + 500 + 100 * t + i, i)
              for t in range(20)]
+    assert f.read_text() in draws, f.name
+  for i, f in enumerate(files(VALIDATION / 'val-occluded-high')):
+    draws = [generate.drawn_occluded_case(occluders.VALIDATION_HIGH,
+                                          generate.VALIDATION_HIGH_SEED + 100 * t + i, i,
+                                          generate.HIGH_KINDS) for t in range(20)]
     assert f.read_text() in draws, f.name
 
 
