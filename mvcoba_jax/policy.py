@@ -16,9 +16,10 @@ import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
-from mvcoba_jax import arguments
+from mvcoba_jax import arguments, perception
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Config, Error
+from mvcoba_jax.deploy import checks
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.learner.checkpoint import CheckpointError, Checkpoints, incompatibilities
@@ -62,19 +63,38 @@ class Policy(typing.NamedTuple):
   def act(self, color, depth, changed: bool = True) -> Decision:
     """The greedy action on one observation (`q_maps`' arguments): the method's rule picks the
     primitive (MV-COBA's: grasp when the last action changed the scene, `changed`, else push;
-    model.json's `action_rule` says each method's) and the argmax rotation and cell of its map."""
-    method = self.network.method
-    depth = jnp.asarray(depth, jnp.float32)[None]
+    model.json's `action_rule` says each method's) and the argmax rotation and cell of its map.
+
+    The observation is checked before the network and the action after it (`deploy.checks`):
+    PolicyError names what is refused (another grid or number of views, heights not in metres,
+    colour out of its range, a non-finite score or a position off the workspace); non-finite
+    cells count as unseen (0)."""
+    config, method = self.config, self.network.method
+    top, half = config.scene.workspace_top, config.scene.workspace_half
+    if not isinstance(changed, (bool, np.bool_)):
+      raise PolicyError(f'changed={changed!r}: True or False (did the last action change the '
+                        'scene)')
+    try:
+      color, depth = checks.observation(color, depth, len(config.scene.cameras),
+                                        perception.grid_size(config), top)
+    except checks.Refused as e:
+      raise PolicyError(f'observation refused: {e}') from None
+    depth = jnp.asarray(depth)[None]
     maps = agent.rule_maps(jnp.asarray(self.q_maps(color, depth[0]))[None], depth, method,
-                           self.config)
-    pick = agent.greedy_actions(maps, jnp.asarray([changed]), method)
-    world = agent.to_world(pick, depth, method.views, self.config)
+                           config)
+    pick = agent.greedy_actions(maps, jnp.asarray([bool(changed)]), method)
+    world = agent.to_world(pick, depth, method.views, config)
     k = int(pick.rotation[0])
-    return Decision(primitive=('push', 'grasp')[int(pick.primitive[0])], rotation=k,
-                    angle=float(rotation_angle(k, self.config.env.num_rotations)),
-                    row=int(pick.row[0]), col=int(pick.col[0]), x=float(world.x[0]),
-                    y=float(world.y[0]), z=float(world.z[0]),
-                    q=float(maps[0, pick.primitive[0], k, pick.row[0], pick.col[0]]))
+    decision = Decision(primitive=('push', 'grasp')[int(pick.primitive[0])], rotation=k,
+                        angle=float(rotation_angle(k, config.env.num_rotations)),
+                        row=int(pick.row[0]), col=int(pick.col[0]), x=float(world.x[0]),
+                        y=float(world.y[0]), z=float(world.z[0]),
+                        q=float(maps[0, pick.primitive[0], k, pick.row[0], pick.col[0]]))
+    try:
+      checks.action(decision.q, decision.angle, (decision.x, decision.y, decision.z), half, top)
+    except checks.Refused as e:
+      raise PolicyError(f'action refused: {e}') from None
+    return decision
 
 
 def _config(saved: dict, path: pathlib.Path) -> Config:

@@ -10,6 +10,7 @@ import pathlib
 
 import numpy as np
 
+from mvcoba_jax.deploy import checks
 from mvcoba_jax.deploy.calibration import Calibration, DeployError
 
 
@@ -25,6 +26,9 @@ class Action:
   q: float
 
 
+RULES = ('change', 'max_q', 'grasp')  # `methods.RULES` by name: the rules this runtime applies
+
+
 def choose(q: np.ndarray, changed: bool, model: dict) -> tuple[int, int, int, int, float]:
   """(primitive, rotation, row, col, score): the greedy action of `model['action_rule']`
   (model.json) from its maps (2, K, R, R), the graph's output named by action_rule['maps'] (Q
@@ -36,8 +40,10 @@ def choose(q: np.ndarray, changed: bool, model: dict) -> tuple[int, int, int, in
     primitive = prims['grasp'] if changed else prims['push']
   elif rule == 'max_q':
     primitive = int(np.argmax(flat.max(axis=1)))  # first maximum: push on a tie
-  else:
+  elif rule == 'grasp':
     primitive = prims['grasp']
+  else:
+    raise DeployError(f'action rule {rule!r} is unknown here (known: {", ".join(RULES)})')
   index = int(np.argmax(flat[primitive]))
   rotation, row, col = (int(i) for i in np.unravel_index(index, q.shape[1:]))
   return primitive, rotation, row, col, float(flat[primitive, index])
@@ -53,9 +59,16 @@ class OnnxPolicy:
     try:
       self.model = json.loads((folder / 'model.json').read_text())
       onnx_file = folder / self.model['onnx']['file']
+      rule = self.model['action_rule']['name']
     except (OSError, ValueError, KeyError, TypeError) as e:
       raise DeployError(f'{folder / "model.json"}: not an export ({type(e).__name__}: '
                         f'{str(e)[:120]})') from None
+    if rule not in RULES:
+      raise DeployError(f'{folder / "model.json"}: action rule {rule!r} is unknown here (known: '
+                        f'{", ".join(RULES)}); a newer mvcoba_jax may apply it')
+    if onnx_file.resolve().parent != folder.resolve():
+      raise DeployError(f'{folder / "model.json"}: onnx.file {self.model["onnx"]["file"]!r} lies '
+                        'outside the export\'s folder')
     options = ort.SessionOptions()
     options.log_severity_level = 3  # the converter's loose shape annotations only warn
     try:
@@ -82,22 +95,33 @@ class OnnxPolicy:
 
   def act(self, color, depth, seen, changed: bool, calibration: Calibration) -> Action:
     """The greedy action in the robot's base frame, refused (DeployError, with the reason) from
-    a frame where a camera saw none of the workspace, or when it would leave the workspace or
-    go below the table."""
+    heightmaps of another grid or number of views than the policy's, heights not in metres or
+    colour out of its range (`checks.observation`; non-finite cells count as unseen), a frame
+    where a camera saw none of the workspace, or when the action has a non-finite score or would
+    leave the workspace or go below the table (`checks.action`)."""
     self.check(calibration)
-    blind = [c.name for c, s in zip(calibration.cameras, np.asarray(seen)) if not s.any()]
+    hm = self.model['heightmap']
+    res, half, side = hm['resolution_m'], hm['workspace_half_m'], hm['grid_size']
+    try:
+      color, depth = checks.observation(color, depth, hm['num_views'], side, calibration.top)
+      seen = np.asarray(seen)
+      if seen.shape != depth.shape or seen.dtype != np.bool_:
+        raise checks.Refused(f'seen of shape {seen.shape} and dtype {seen.dtype}: booleans '
+                             f'of the depth\'s shape {depth.shape}')
+    except checks.Refused as e:
+      raise DeployError(f'refused: {e}') from None
+    blind = [c.name for c, s in zip(calibration.cameras, seen[hm['views_used']]) if not s.any()]
     if blind:
       raise DeployError(f'refused: camera {", ".join(blind)} sees none of the workspace')
     primitive, rotation, row, col, score = self.choose(color, depth, changed)
-    hm = self.model['heightmap']
-    res, half = hm['resolution_m'], hm['workspace_half_m']
     x, y = -half + (col + 0.5) * res, -half + (row + 0.5) * res
-    z = float(np.asarray(depth)[hm['views_used'], row, col].max())
-    if not (abs(x) <= half and abs(y) <= half and 0.0 <= z <= calibration.top):
-      raise DeployError(f'refused: the action at ({x:.3f}, {y:.3f}, {z:.3f}) m leaves the '
-                        'workspace or goes below the table')
-    names = {v: k for k, v in self.model['primitives'].items()}
+    z = float(depth[hm['views_used'], row, col].max())
     angle = self.model['rotations']['angles_rad'][rotation] + calibration.yaw
+    try:
+      checks.action(score, angle, (x, y, z), half, calibration.top)
+    except checks.Refused as e:
+      raise DeployError(f'refused: {e}') from None
+    names = {v: k for k, v in self.model['primitives'].items()}
     return Action(primitive=names[primitive],
                   position=tuple(float(v) for v in calibration.workspace_to_base((x, y, z))),
                   angle=math.remainder(angle, 2 * math.pi), rotation=rotation, row=row, col=col,

@@ -199,3 +199,87 @@ def test_the_deploy_extra_alone_turns_camera_files_into_the_same_action(scenes, 
   refused = subprocess.run([str(venv / 'bin' / 'mvcoba-train')], capture_output=True, text=True)
   assert refused.returncode == 2 and refused.stderr.count('\n') == 1, refused.stderr
   assert "pip install 'mvcoba-jax[train]'" in refused.stderr
+
+
+def fuzzed_observations(seed: int = 0):
+  """(what, colour, depth) of the example state broken in the ways a lab's pipeline breaks it,
+  with a fixed seed: non-finite cells, other units, grids, views and dtypes, and valid
+  variants (uint8 and uint16 colour, NaN cells treated as unseen)."""
+  state = np.load(ROOT / 'pretrained' / 'example-state.npz')
+  color, depth = state['color'], state['depth']
+  rng = np.random.default_rng(seed)
+  cells = lambda a, v: np.where(rng.random(a.shape) < 0.01, v, a).astype(a.dtype)
+  yield 'as saved', color, depth
+  yield 'NaN depth cells', color, cells(depth, np.nan)
+  yield 'infinite depth cells', color, cells(depth, np.inf)
+  yield '-inf depth cells', color, cells(depth, -np.inf)
+  yield 'all depth NaN', color, np.full_like(depth, np.nan)
+  yield 'NaN colour', np.full_like(color, np.nan), depth
+  yield 'NaN colour cells', cells(color, np.nan), depth
+  yield 'depth in mm', color, depth * 1000
+  yield 'negative depth', color, depth - 0.05
+  yield 'uint8 colour', np.round(color * 255).astype(np.uint8), depth
+  yield 'uint16 colour', np.round(color * 65535).astype(np.uint16), depth
+  yield 'float 0-255 colour', color * 255, depth
+  yield 'float64 lists', color.astype(np.float64).tolist(), depth.tolist()
+  yield 'one view', color[:1], depth[:1]
+  yield 'three views', np.concatenate([color, color[:1]]), np.concatenate([depth, depth[:1]])
+  yield 'a 224 grid', color.repeat(2, 1).repeat(2, 2), depth.repeat(2, 1).repeat(2, 2)
+  yield 'a 56 grid', color[:, ::2, ::2], depth[:, ::2, ::2]
+  yield 'grey colour', color[..., 0], depth
+  yield 'strings', color.astype(str), depth
+  yield 'booleans', color > 0.5, depth > 0
+  yield 'complex depth', color, depth.astype(np.complex64)
+  yield 'ragged lists', color, [depth[0].tolist(), depth[1, :5].tolist()]
+  yield 'random heights', color, rng.uniform(-0.01, 0.5, depth.shape).astype(np.float32)
+  for i in range(8):  # plausible noise: valid or refused, never acted on wrongly
+    yield f'noise {i}', rng.random(color.shape, np.float32), rng.uniform(
+        0, 0.3, depth.shape).astype(np.float32)
+
+
+def test_fuzzed_observations_are_refused_or_give_a_safe_action(onnx):
+  """Every broken observation is refused with one line, or the JAX policy and the exported one
+  both act finitely inside the workspace above the table; a NaN cell is unseen, never fed on
+  (the action with NaN cells is the action with those cells at 0)."""
+  jax_policy = policy.load(ROOT / 'pretrained' / 'mvcoba')
+  cal = calibration_from_dict(calibration(make_env('default', 'native')))
+  half, top = cal.half, cal.top
+  outcomes = {'acted': 0, 'refused': 0}
+  seen = np.ones((2, 112, 112), bool)
+  for what, color, depth in fuzzed_observations():
+    for name, act in (('jax', lambda: jax_policy.act(color, depth, True)),
+                      ('onnx', lambda: onnx.act(color, depth, seen, True, cal))):
+      try:
+        a = act()
+      except (policy.PolicyError, DeployError) as e:
+        assert '\n' not in str(e) and len(str(e)) < 300, (what, name, str(e))
+        outcomes['refused'] += 1
+        continue
+      x, y, z = (a.x, a.y, a.z) if name == 'jax' else (
+          cal.base_to_workspace() @ np.append(a.position, 1.0))[:3]
+      assert math.isfinite(a.q) and math.isfinite(a.angle), (what, name, a)
+      assert abs(x) <= half + 1e-6 and abs(y) <= half + 1e-6, (what, name, a)
+      assert -1e-6 <= z <= top + 1e-6, (what, name, a)
+      outcomes['acted'] += 1
+  assert outcomes['acted'] >= 12 and outcomes['refused'] >= 20, outcomes
+  state = np.load(ROOT / 'pretrained' / 'example-state.npz')
+  broken = state['depth'].copy()
+  broken[:, 10:20, 10:20] = np.nan
+  zeroed = np.nan_to_num(broken, nan=0.0)
+  assert jax_policy.act(state['color'], broken) == jax_policy.act(state['color'], zeroed)
+  assert jax_policy.act(state['color'], state['depth'], changed=False).primitive == 'push'
+  with pytest.raises(policy.PolicyError, match='changed='):
+    jax_policy.act(state['color'], state['depth'], changed='yes')
+
+
+def test_a_network_that_scores_nan_is_never_acted_on():
+  """Parameters damaged after loading (a NaN weight): every Q is NaN, the argmax would be a grasp
+  at the workspace's corner; the policy refuses instead."""
+  from flax import nnx  # noqa: PLC0415
+  loaded = policy.load(ROOT / 'pretrained' / 'mvcoba')
+  state = nnx.state(loaded.network, nnx.Param)
+  leaves, tree = jax.tree.flatten(state)
+  nnx.update(loaded.network, jax.tree.unflatten(tree, [leaves[0] * np.nan] + leaves[1:]))
+  example = np.load(ROOT / 'pretrained' / 'example-state.npz')
+  with pytest.raises(policy.PolicyError, match='action refused: the network scored the action nan'):
+    loaded.act(example['color'], example['depth'])
