@@ -17,7 +17,6 @@ import dataclasses
 import io
 import json
 import logging
-import os
 import pathlib
 
 import jax
@@ -194,8 +193,9 @@ def export(workdir, out, results=(), commit: str | None = None,
   """Writes params.npz, model.json and model.onnx of the latest checkpoint of `workdir` to `out`;
   model.json carries the figures of the `results` files' rows for these parameters (`figures`)
   and `commit`, the code that trained it, when given. An `out` holding an export is refused
-  unless `overwrite`; the folder is held (`folders.claim`) while it is written, each file
-  replaced whole.
+  unless `overwrite`; the folder is held (`folders.claim`) while it is written, and its three
+  files are replaced at once (`folders.replace_whole`): a kill or a full disk leaves the old
+  export or the new one, never a mix.
 
   Raises PolicyError for a checkpoint or results that cannot serve, or an `out` that cannot be
   written, before anything is written.
@@ -212,25 +212,24 @@ def export(workdir, out, results=(), commit: str | None = None,
   measured = figures(results, model)
   flat = flat_params(model)
   proto = onnx_model(config, model)
-  try:
-    out = folders.claim(out, EXPORT_FILES, overwrite=overwrite, keep_flag=None)
+  try:  # held while written; an export it holds is kept until the new one replaces it whole
+    out = folders.claim(out, EXPORT_FILES, keep=True, keep_flag=None)
   except folders.FolderError as e:
     raise PolicyError(str(e)) from None
   try:
-    paths = {'params': out / 'params.npz', 'model_json': out / 'model.json',
-             'onnx': out / 'model.onnx'}
     buffer = io.BytesIO()
     np.savez(buffer, **flat)
-    contents = {'params': buffer.getvalue(),
-                'model_json': json.dumps(describe(config, flat, step, workdir, commit, measured),
-                                         indent=1).encode(),
-                'onnx': proto.SerializeToString()}
-    for name, path in paths.items():
-      partial = path.with_name(f'.{path.name}.partial')
-      partial.write_bytes(contents[name])
-      os.replace(partial, path)
+    model_json = json.dumps(describe(config, flat, step, workdir, commit, measured), indent=1,
+                            allow_nan=False)
+    folders.replace_whole(out, {'params.npz': buffer.getvalue(),
+                                'model.json': model_json.encode(),
+                                'model.onnx': proto.SerializeToString()})
   except OSError as e:
-    raise PolicyError(f'{out}: cannot write the export ({e.strerror})') from None
+    raise PolicyError(f'{out}: cannot write the export ({e.strerror}); what it held is kept'
+                      ) from None
+  except ValueError as e:  # a non-finite number in model.json
+    raise PolicyError(f'{workdir}: model.json would hold {e}') from None
   finally:
     folders.release(out)
-  return paths
+  return {'params': out / 'params.npz', 'model_json': out / 'model.json',
+          'onnx': out / 'model.onnx'}

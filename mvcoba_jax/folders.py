@@ -7,6 +7,8 @@ earlier invocation that the command would replace, unless the user said so.
 """
 from __future__ import annotations
 
+import ctypes
+import errno
 import fcntl
 import os
 import pathlib
@@ -97,3 +99,54 @@ def release(folder) -> None:
   lock_file = _held.pop(pathlib.Path(folder).resolve(), None)
   if lock_file is not None:
     lock_file.close()
+
+
+def replace_whole(folder, contents: dict[str, bytes]) -> None:
+  """Writes `contents` (file name -> bytes) as `folder`'s new whole set of those files, at once:
+  they go to a staging folder beside it (on the same file system, with every other entry of the
+  folder copied in), which is then exchanged with `folder` by one atomic rename (Linux's
+  renameat2 RENAME_EXCHANGE; elsewhere two renames, a window of microseconds). A kill or a full
+  disk at any moment leaves `folder` holding the old set or the new one, never a mix. OSError
+  when writing fails, with `folder` untouched and the staging folder removed."""
+  folder = pathlib.Path(folder).absolute()
+  staging = folder.with_name(f'.{folder.name}.staging-{os.getpid()}')
+  shutil.rmtree(staging, ignore_errors=True)
+  try:
+    staging.mkdir()
+    for entry in (folder.iterdir() if folder.is_dir() else ()):
+      if entry.name in contents or entry.name == LOCK_NAME:
+        continue
+      (shutil.copytree if entry.is_dir() else shutil.copy2)(entry, staging / entry.name)
+    for name, data in contents.items():
+      with open(staging / name, 'wb') as f:
+        f.write(data)
+        f.flush()
+        os.fsync(f.fileno())
+    if folder.is_dir():
+      _exchange(staging, folder)  # staging now holds the old set
+    else:
+      os.rename(staging, folder)
+  finally:
+    shutil.rmtree(staging, ignore_errors=True)
+
+
+_RENAME_EXCHANGE = 2
+_AT_FDCWD = -100
+
+
+def _exchange(a: pathlib.Path, b: pathlib.Path) -> None:
+  """Swaps two folders' names atomically where the kernel can (renameat2), else by two renames."""
+  try:
+    renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
+  except (OSError, AttributeError):
+    renameat2 = None
+  if renameat2 is not None:
+    if renameat2(_AT_FDCWD, os.fsencode(a), _AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
+      return
+    code = ctypes.get_errno()
+    if code not in (errno.ENOSYS, errno.EINVAL, errno.ENOTSUP):
+      raise OSError(code, os.strerror(code), str(b))
+  parked = b.with_name(b.name + '.old')
+  os.rename(b, parked)
+  os.rename(a, b)
+  os.rename(parked, a)

@@ -7,6 +7,7 @@ import pathlib
 import shutil
 import subprocess
 import sys
+import time
 import warnings
 
 import jax
@@ -288,8 +289,51 @@ def test_an_export_is_never_replaced_unasked(run, exported, tmp_path, capsys):
   assert (folder / 'model.json').read_text() == '{"kept": true}'
   assert export_cli.main([*args, '--overwrite']) == 0
   assert json.loads((folder / 'model.json').read_text())['source']['checkpoint_step'] == 8
-  assert sorted(p.name for p in folder.iterdir()) == ['.lock', 'model.json', 'model.onnx',
-                                                      'params.npz']
+  assert sorted(p.name for p in folder.iterdir()) == ['model.json', 'model.onnx', 'params.npz']
+  assert not list(tmp_path.glob('.shipped.*'))  # no staging folder left
+
+
+def test_replacing_an_export_leaves_the_old_or_the_new_never_a_mix(run, exported, tmp_path,
+                                                                   monkeypatch):
+  """--overwrite writes the new export beside the old and swaps the two at once: a write that
+  fails (a full disk) keeps the old export whole and a file of the user's beside it; kills at
+  three moments of a real `mvcoba-export` leave the old export or the new one, each whole."""
+  folder = tmp_path / 'shipped'
+  shutil.copytree(exported[0]['params'].parent, folder)
+  (folder / 'model.json').write_text('{"old": true}')
+  (folder / 'notes.txt').write_text('mine')
+  files = lambda: {p.name: p.read_bytes() for p in folder.iterdir() if p.name != '.lock'}
+  old = files()
+  real_write = open
+
+  def full_disk(path, mode='r', *args, **kwargs):
+    if 'w' in mode and str(path).endswith('model.onnx'):
+      raise OSError(28, 'No space left on device')
+    return real_write(path, mode, *args, **kwargs)
+
+  monkeypatch.setattr('builtins.open', full_disk)
+  with pytest.raises(policy.PolicyError, match='No space left on device.*what it held is kept'):
+    export.export(run[1], folder, overwrite=True)
+  monkeypatch.undo()
+  assert files() == old
+  assert not list(tmp_path.glob('.shipped.*'))
+  export.export(run[1], folder, overwrite=True)
+  new = files()
+  assert new['notes.txt'] == b'mine' and new['model.json'] != old['model.json']
+  (folder / 'model.json').write_bytes(old['model.json'])  # old again, for the kills
+  old = files()
+  command = [sys.executable, '-m', 'mvcoba_jax.cli.export', '--checkpoint', str(run[1]),
+             '--out', str(folder), '--overwrite']
+  for delay in (4.0, 8.0, 12.0):
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(delay)
+    process.kill()
+    process.wait()
+    now = files()
+    assert now == old or (
+        now.keys() == new.keys() and now['params.npz'] == new['params.npz']
+        and json.loads(now['model.json'])['source'] == json.loads(new['model.json'])['source']
+        and len(now['model.onnx']) == len(new['model.onnx'])), (delay, sorted(now))
 
 
 def test_export_folder_of_another_network_is_a_clear_error(exported, tmp_path):
