@@ -28,7 +28,8 @@ from mvcoba_jax import folders, methods, perception
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Config
 from mvcoba_jax.learner import agent, networks
-from mvcoba_jax.policy import FORMAT, PolicyError, fingerprint, flat_params, load
+from mvcoba_jax.deploy.model_file import FORMAT
+from mvcoba_jax.policy import PolicyError, fingerprint, flat_params, load
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.sim.primitives import GRASP, PUSH
 

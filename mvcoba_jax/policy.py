@@ -19,12 +19,12 @@ from flax import nnx
 from mvcoba_jax import arguments, perception
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Config, Error
-from mvcoba_jax.deploy import checks
+from mvcoba_jax.deploy import checks, model_file
+from mvcoba_jax.deploy.calibration import DeployError
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.learner.checkpoint import CheckpointError, Checkpoints, incompatibilities
 
-FORMAT = 'mvcoba-jax-export/1'
 PARAM_LIMIT = 1e6  # no trained weight comes near this; a larger one is damage, not learning
 STEP_LIMIT = 10 ** 12  # actions: more than any training here could take
 
@@ -211,9 +211,10 @@ def load_exported(folder) -> Policy:
   folder = pathlib.Path(folder)
   model_path, params_path = folder / 'model.json', folder / 'params.npz'
   try:
-    described = json.loads(model_path.read_text())
-    if described.get('format') != FORMAT:
-      raise ValueError(f'format {described.get("format")!r}, expected {FORMAT!r}')
+    described = model_file.read(folder).raw
+  except DeployError as e:
+    raise PolicyError(str(e)) from None
+  try:
     config = _config(described['config'], model_path)
     step = described['source']['checkpoint_step']
     if isinstance(step, bool) or not isinstance(step, int) or not 0 <= step <= STEP_LIMIT:

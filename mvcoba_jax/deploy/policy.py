@@ -4,14 +4,14 @@ onnxruntime only."""
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import pathlib
 
 import numpy as np
 
-from mvcoba_jax.deploy import checks
+from mvcoba_jax.deploy import checks, model_file
 from mvcoba_jax.deploy.calibration import Calibration, DeployError
+from mvcoba_jax.deploy.model_file import RULES
 
 
 @dataclasses.dataclass(frozen=True)
@@ -24,9 +24,6 @@ class Action:
   row: int
   col: int
   q: float
-
-
-RULES = ('change', 'max_q', 'grasp')  # `methods.RULES` by name: the rules this runtime applies
 
 
 def choose(q: np.ndarray, changed: bool, model: dict) -> tuple[int, int, int, int, float]:
@@ -56,19 +53,9 @@ class OnnxPolicy:
   def __init__(self, folder):
     import onnxruntime as ort  # noqa: PLC0415 (only a policy needs it, not the heightmaps)
     self.folder = folder = pathlib.Path(folder)
-    try:
-      self.model = json.loads((folder / 'model.json').read_text())
-      onnx_file = folder / self.model['onnx']['file']
-      rule = self.model['action_rule']['name']
-    except (OSError, ValueError, KeyError, TypeError) as e:
-      raise DeployError(f'{folder / "model.json"}: not an export ({type(e).__name__}: '
-                        f'{str(e)[:120]})') from None
-    if rule not in RULES:
-      raise DeployError(f'{folder / "model.json"}: action rule {rule!r} is unknown here (known: '
-                        f'{", ".join(RULES)}); a newer mvcoba_jax may apply it')
-    if onnx_file.resolve().parent != folder.resolve():
-      raise DeployError(f'{folder / "model.json"}: onnx.file {self.model["onnx"]["file"]!r} lies '
-                        'outside the export\'s folder')
+    self.spec = model_file.read(folder)  # refuses a damaged, unknown or hand-broken model.json
+    self.model = self.spec.raw
+    onnx_file = self.spec.onnx_file
     options = ort.SessionOptions()
     options.log_severity_level = 3  # the converter's loose shape annotations only warn
     try:
@@ -78,17 +65,20 @@ class OnnxPolicy:
       raise DeployError(f'{onnx_file}: cannot load the network ({str(e)[:160]})') from None
 
   def check(self, calibration: Calibration) -> None:
-    """Refuses a calibration whose workspace grid is not the one the network was trained on."""
-    hm = self.model['heightmap']
-    if (abs(calibration.half - hm['workspace_half_m']) > 1e-9
-        or abs(calibration.resolution - hm['resolution_m']) > 1e-9):
+    """Refuses a calibration whose workspace grid or number of cameras is not the policy's."""
+    spec = self.spec
+    if (abs(calibration.half - spec.workspace_half_m) > 1e-9
+        or abs(calibration.resolution - spec.resolution_m) > 1e-9):
       raise DeployError(f'the calibration\'s workspace (half {calibration.half:g} m, resolution '
                         f'{calibration.resolution:g} m) is not the policy\'s (half '
-                        f'{hm["workspace_half_m"]:g} m, resolution {hm["resolution_m"]:g} m)')
+                        f'{spec.workspace_half_m:g} m, resolution {spec.resolution_m:g} m)')
+    if len(calibration.cameras) != spec.num_views:
+      raise DeployError(f'the calibration has {len(calibration.cameras)} cameras, the policy reads '
+                        f'{spec.num_views} views')
 
   def choose(self, color, depth, changed: bool) -> tuple[int, int, int, int, float]:
     """(primitive, rotation, row, col, score) of the greedy action on heightmaps of every view."""
-    (maps,) = self.session.run([self.model['action_rule']['maps']],
+    (maps,) = self.session.run([self.spec.maps],
                                {'color': np.asarray(color, np.float32)[None],
                                 'depth': np.asarray(depth, np.float32)[None]})
     return choose(maps[0], changed, self.model)
@@ -100,29 +90,30 @@ class OnnxPolicy:
     where a camera saw none of the workspace, or when the action has a non-finite score or would
     leave the workspace or go below the table (`checks.action`)."""
     self.check(calibration)
-    hm = self.model['heightmap']
-    res, half, side = hm['resolution_m'], hm['workspace_half_m'], hm['grid_size']
+    spec = self.spec
+    res, half = spec.resolution_m, spec.workspace_half_m
     try:
-      color, depth = checks.observation(color, depth, hm['num_views'], side, calibration.top)
+      color, depth = checks.observation(color, depth, spec.num_views, spec.grid_size,
+                                        calibration.top)
       seen = np.asarray(seen)
       if seen.shape != depth.shape or seen.dtype != np.bool_:
         raise checks.Refused(f'seen of shape {seen.shape} and dtype {seen.dtype}: booleans '
                              f'of the depth\'s shape {depth.shape}')
     except checks.Refused as e:
       raise DeployError(f'refused: {e}') from None
-    blind = [c.name for c, s in zip(calibration.cameras, seen[hm['views_used']]) if not s.any()]
+    used = list(spec.views_used)
+    blind = [calibration.cameras[v].name for v in used if not seen[v].any()]
     if blind:
       raise DeployError(f'refused: camera {", ".join(blind)} sees none of the workspace')
     primitive, rotation, row, col, score = self.choose(color, depth, changed)
     x, y = -half + (col + 0.5) * res, -half + (row + 0.5) * res
-    z = float(depth[hm['views_used'], row, col].max())
-    angle = self.model['rotations']['angles_rad'][rotation] + calibration.yaw
+    z = float(depth[used, row, col].max())
+    angle = spec.angles_rad[rotation] + calibration.yaw
     try:
       checks.action(score, angle, (x, y, z), half, calibration.top)
     except checks.Refused as e:
       raise DeployError(f'refused: {e}') from None
-    names = {v: k for k, v in self.model['primitives'].items()}
-    return Action(primitive=names[primitive],
+    return Action(primitive='grasp' if primitive == spec.grasp else 'push',
                   position=tuple(float(v) for v in calibration.workspace_to_base((x, y, z))),
                   angle=math.remainder(angle, 2 * math.pi), rotation=rotation, row=row, col=col,
                   q=score)
@@ -133,9 +124,8 @@ class OnnxPolicy:
     than `change_area` / resolution^2 in some view changed height by between `change_min` and
     `change_max` (model.json's config; VPG's 300 cells at 2 mm, 1 to 30 cm), cells missing
     from either frame counting as unchanged."""
-    p = self.model['config']['perception']
+    spec = self.spec
     (d0, s0), (d1, s1) = before, after
     diff = np.abs(np.asarray(d1) - np.asarray(d0))
-    moved = (diff >= p['change_min']) & (diff <= p['change_max']) & s0 & s1
-    return bool((moved.sum(axis=(-2, -1)) > p['change_area'] / p['heightmap_resolution'] ** 2)
-                .any())
+    moved = (diff >= spec.change_min) & (diff <= spec.change_max) & s0 & s1
+    return bool((moved.sum(axis=(-2, -1)) > spec.change_area / spec.resolution_m ** 2).any())

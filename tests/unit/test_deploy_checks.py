@@ -58,3 +58,68 @@ def test_an_unsafe_action_is_refused(q, angle, position, match):
   with pytest.raises(checks.Refused, match=match):
     checks.action(q, angle, position, HALF, TOP)
   checks.action(1.0, 0.5, (0.2, -0.2, 0.1), HALF, TOP)  # a sound one passes
+
+
+SHIPPED = __import__('pathlib').Path(__file__).resolve().parents[2] / 'pretrained'
+ODD = [None, 'x', -1, 2 ** 70, 1e300, True, [], {}, [[1]], 0.5]
+FIELDS = ('format', 'action_rule.name', 'action_rule.maps', 'primitives.push', 'primitives.grasp',
+          'rotations.num_rotations', 'rotations.angles_rad', 'heightmap.resolution_m',
+          'heightmap.workspace_half_m', 'heightmap.grid_size', 'heightmap.num_views',
+          'heightmap.views_used', 'onnx.file', 'config.perception.change_min',
+          'config.perception.change_max', 'config.perception.change_area',
+          'config.perception.heightmap_resolution')
+
+
+def test_every_shipped_model_json_reads():
+  from mvcoba_jax.deploy import model_file
+  for folder in sorted(p for p in SHIPPED.iterdir() if p.is_dir()):
+    spec = model_file.read(folder)
+    assert spec.grid_size == 112 and len(spec.angles_rad) == 16
+    assert spec.onnx_file.parent == folder.resolve()
+
+
+def test_a_model_json_broken_where_an_action_depends_on_it_is_refused_naming_it(tmp_path):
+  """Each field an action reads, dropped or set to each odd value in turn (fixed list): the file
+  reads only where the value is still one the field allows, else one line naming the file and
+  the field; an unknown format or rule, NaN, and an ONNX file outside the folder are refused."""
+  import json
+  import random
+  from mvcoba_jax.deploy import DeployError, model_file
+  base = json.loads((SHIPPED / 'mvcoba' / 'model.json').read_text())
+  rng, refused, read = random.Random(0), 0, 0
+
+  def write(described, text=None):
+    (tmp_path / 'model.json').write_text(text or json.dumps(described))
+    return tmp_path
+
+  for dotted in FIELDS:
+    for value in [...] + rng.sample(ODD, 5):
+      described = json.loads(json.dumps(base))
+      *parents, key = dotted.split('.')
+      section = described
+      for name in parents:
+        section = section[name]
+      if value is ...:
+        del section[key]
+      else:
+        section[key] = value
+      try:
+        model_file.read(write(described))
+        read += 1
+        assert value is not ... and (dotted.startswith('config.perception.change')
+                                     or (dotted, value) == ('onnx.file', 'x')), (dotted, value)
+      except DeployError as e:
+        refused += 1
+        assert str(tmp_path / 'model.json') in str(e) and '\n' not in str(e), str(e)
+        assert dotted in str(e) or 'format' in str(e) or 'rule' in str(e), (dotted, str(e))
+  assert refused >= 90 and read <= 6, (refused, read)
+  for change, match in ((('format', 'mvcoba-jax-export/2'), 'format'),
+                        (('action_rule', {'name': 'spot', 'maps': 'q'}), "'spot' is unknown"),
+                        (('onnx', {'file': '../other/model.onnx'}), 'outside')):
+    described = json.loads(json.dumps(base))
+    described[change[0]] = change[1]
+    with pytest.raises(DeployError, match=match):
+      model_file.read(write(described))
+  text = json.dumps(base).replace('"angles_rad": [0.0', '"angles_rad": [NaN', 1)
+  with pytest.raises(DeployError, match='NaN is not a number JSON allows'):
+    model_file.read(write(None, text))

@@ -85,9 +85,12 @@ def test_non_finite_and_wrong_dtype_params(saved, tmp_path):
 
 @pytest.mark.parametrize('edit, says', [
     (lambda d: d['config']['train'].update(batch_size='eight'), "train.batch_size='eight'"),
-    (lambda d: d['config']['perception'].update(heightmap_resolution=0.003), 'must tile'),
+    (lambda d: d['config']['perception'].update(heightmap_resolution=0.003),
+     'config.perception.heightmap_resolution is not heightmap.resolution_m'),
+    (lambda d: d['config']['perception'].update(heightmap_resolution=0.003)
+     or d['heightmap'].update(resolution_m=0.003, grid_size=149), 'must tile'),
     (lambda d: d['source'].update(checkpoint_step='x'), 'not an export'),
-    (lambda d: d['source'].update(checkpoint_step=float('inf')), "checkpoint_step 'inf'"),
+    (lambda d: d['source'].update(checkpoint_step=float('inf')), 'Infinity is not a number'),
     (lambda d: d['source'].update(checkpoint_step=-3), "checkpoint_step '-3'"),
     (lambda d: d.update(format='other/1'), "format 'other/1'"),
     (lambda d: d['source'].update(checkpoint_step=10 ** 30), "checkpoint_step '1000000"),
