@@ -27,8 +27,9 @@ class Rig:
     """Each camera's depth image in metres (height, width) and its colour image (RGB), or None."""
     raise NotImplementedError
 
-  def execute(self, action: Action) -> None:
-    """Moves the robot through the primitive (a grasp closes and lifts, a push slides 10 cm)."""
+  def execute(self, action: Action) -> bool | None:
+    """Moves the robot through the primitive (a grasp closes and lifts, a push slides 10 cm);
+    after a grasp, whether the gripper holds something (its opening, say), else None."""
     raise NotImplementedError
 
 
@@ -53,13 +54,14 @@ class SimulatedRig(Rig):
     return ([np.asarray(i.depth, np.float64) for i in images],
             [np.round(np.asarray(i.rgb) * 255).astype(np.uint8) for i in images])
 
-  def execute(self, action: Action) -> None:
+  def execute(self, action: Action) -> bool | None:
     jnp = self.jax.numpy
     x, y, z = action.position
     command = self.sim_action(primitive=jnp.int32(action.primitive == 'grasp'),
                               rotation=jnp.int32(action.rotation), x=jnp.float32(x),
                               y=jnp.float32(y), z=jnp.float32(z))
-    self.state, _ = self.step(self.state, command)
+    self.state, info = self.step(self.state, command)
+    return bool(info.grasp_success) if action.primitive == 'grasp' else None
 
   def objects(self) -> int:
     return int(np.asarray(self.state.in_play).sum())
@@ -78,10 +80,10 @@ def run(rig: Rig, policy: OnnxPolicy, calibration, actions: int, say=print) -> l
       records.append({'round': i, 'refused': str(e)})
       say(json.dumps(records[-1]))
       break
-    rig.execute(action)
+    grasped = rig.execute(action)
     depths, colors = rig.capture()
     after = heightmaps(depths, calibration, colors)
-    changed = policy.changed(frame[1:], after[1:])
+    changed = policy.changed(frame[1:], after[1:], grasped)
     frame = after
     records.append({'round': i, 'primitive': action.primitive,
                     'position': [round(v, 4) for v in action.position],

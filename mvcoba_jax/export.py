@@ -67,11 +67,9 @@ def onnx_model(config: Config, model: networks.QNetwork):
 
 def deploy_unsupported(config: Config) -> str | None:
   """The first setting of `config` that model.json cannot carry to a runtime outside JAX, or
-  None: the deploy path builds each view's heightmap alone and observes change as the paper."""
+  None: the deploy path builds each view's heightmap alone."""
   if config.perception.fill_unseen:
     return 'perception.fill_unseen=true'
-  if not config.perception.failed_grasp_changes:
-    return 'perception.failed_grasp_changes=false'
   return None
 
 

@@ -36,6 +36,7 @@ class ModelFile:
   change_min: float
   change_max: float
   change_area: float
+  failed_grasp_changes: bool  # False: a grasp that held nothing is no change (absent: True)
 
 
 def read(folder) -> ModelFile:
@@ -87,7 +88,13 @@ def read(folder) -> ModelFile:
   if abs(field.get('config.perception.heightmap_resolution', float, (1e-4, 0.05)) - res) > 1e-12:
     raise DeployError(f'{path}: config.perception.heightmap_resolution is not '
                       'heightmap.resolution_m')
+  perception = raw['config']['perception']
+  failed_grasp_changes = perception.get('failed_grasp_changes', True)
+  if type(failed_grasp_changes) is not bool:
+    raise DeployError(f'{path}: config.perception.failed_grasp_changes '
+                      f'{str(failed_grasp_changes)[:40]!r}: true or false expected')
   return ModelFile(raw=raw, rule=rule, maps=maps, push=push, grasp=grasp,
+                   failed_grasp_changes=failed_grasp_changes,
                    angles_rad=tuple(float(a) for a in angles), resolution_m=res, grid_size=side,
                    workspace_half_m=half, num_views=views, views_used=tuple(used),
                    onnx_file=onnx_file, **change)

@@ -118,13 +118,20 @@ class OnnxPolicy:
                   angle=math.remainder(angle, 2 * math.pi), rotation=rotation, row=row, col=col,
                   q=score)
 
-  def changed(self, before, after) -> bool:
-    """Whether the scene changed between two frames' (depth, seen) heightmaps, as training
-    observes it (`perception.change_observed`, without the grasp's own success): more cells
-    than `change_area` / resolution^2 in some view changed height by between `change_min` and
-    `change_max` (model.json's config; VPG's 300 cells at 2 mm, 1 to 30 cm), cells missing
-    from either frame counting as unchanged."""
+  def changed(self, before, after, grasped: bool | None = None) -> bool:
+    """Whether the last action changed the scene, as training observes it
+    (`perception.change_observed`): a grasp that held something (`grasped` True), or between
+    two frames' (depth, seen) heightmaps more cells than `change_area` / resolution^2 in some
+    view changed height by between `change_min` and `change_max` (model.json's config; VPG's
+    300 cells at 2 mm, 1 to 30 cm), cells missing from either frame counting as unchanged. A
+    policy trained with `perception.failed_grasp_changes` off counts a grasp that held nothing
+    (`grasped` False) as no change whatever it moved. `grasped`: None after a push, or where the
+    robot cannot tell."""
     spec = self.spec
+    if grasped:
+      return True
+    if grasped is False and not spec.failed_grasp_changes:
+      return False
     (d0, s0), (d1, s1) = before, after
     diff = np.abs(np.asarray(d1) - np.asarray(d0))
     moved = (diff >= spec.change_min) & (diff <= spec.change_max) & s0 & s1

@@ -283,3 +283,21 @@ def test_a_network_that_scores_nan_is_never_acted_on():
   example = np.load(ROOT / 'pretrained' / 'example-state.npz')
   with pytest.raises(policy.PolicyError, match='action refused: the network scored the action nan'):
     loaded.act(example['color'], example['depth'])
+
+
+def test_a_failed_grasp_is_no_change_for_a_policy_trained_so(scenes, onnx):
+  """`changed` as training observes it: a grasp that held something is a change whatever the
+  frames show; a grasp that held nothing is no change for a policy trained with
+  `perception.failed_grasp_changes=false`, whatever it moved, and the frames decide otherwise."""
+  import copy
+  import dataclasses
+  env, _, _, observed = scenes
+  before = (np.asarray(observed.depth[0]), np.asarray(observed.seen[0]))
+  after = (np.asarray(observed.depth[1]), np.asarray(observed.seen[1]))  # another drop: moved
+  assert onnx.spec.failed_grasp_changes and onnx.changed(before, after)
+  assert onnx.changed(before, before, grasped=True) and not onnx.changed(before, before)
+  assert onnx.changed(before, after, grasped=False)  # the paper's rule: the frames decide
+  strict = copy.copy(onnx)
+  strict.spec = dataclasses.replace(onnx.spec, failed_grasp_changes=False)
+  assert not strict.changed(before, after, grasped=False)
+  assert strict.changed(before, after) and strict.changed(before, before, grasped=True)

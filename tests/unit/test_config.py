@@ -217,5 +217,5 @@ def test_saved_config_without_the_winning_policy_fields_keeps_the_papers_rule():
   assert config.perception.failed_grasp_changes and defaulted(saved, config) == {}
   assert export.deploy_unsupported(config) is None
   assert export.deploy_unsupported(trained) == 'perception.fill_unseen=true'
-  assert (export.deploy_unsupported(resolve('tiny', ['perception.failed_grasp_changes=false']))
-          == 'perception.failed_grasp_changes=false')
+  assert export.deploy_unsupported(resolve('tiny', ['perception.failed_grasp_changes=false'])
+                                   ) is None  # deploy's `changed` takes the grasp's outcome
