@@ -21,6 +21,7 @@ from mvcoba_jax import config as config_lib
 from mvcoba_jax import methods as methods_lib
 from mvcoba_jax.config import MAX_ACTIONS_LIMIT, Config, Error
 from mvcoba_jax.learner import sharding
+from mvcoba_jax.sim import physics
 from mvcoba_jax.learner.checkpoint import (CheckpointError, Checkpoints, holds_checkpoint,
                                            latest_step)
 from mvcoba_jax.learner.run_log import (action_records, plot_curves, plot_sweep, read_records,
@@ -83,6 +84,9 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
     if not holds_checkpoint(workdir):
       raise TrainError(f'resume: {workdir / "checkpoints"} holds no checkpoint')
     resumable(config, workdir)
+  problem = physics.device_problem(config.scene)
+  if problem:
+    raise TrainError(problem)
   devices = sharding.mesh()
   try:  # a config that cannot be built fails here, before the work directory exists
     sharding.check_divisible(config.num_envs, devices)

@@ -12,6 +12,8 @@ switches on their gravity compensation, so they float at rest, touch nothing and
 """
 from __future__ import annotations
 
+import os
+
 import jax.numpy as jnp
 import numpy as np
 from flax import struct
@@ -38,6 +40,24 @@ def resolve_backend(scene: SceneConfig) -> str:
   JAX implementation at 64 to 4096 tabletops. Warp is chosen by name (the `gpu` preset) until
   a measurement on an accelerator says it is faster."""
   return 'native' if scene.backend == 'auto' else scene.backend
+
+
+FORCE_WARP_CPU = 'MVCOBA_JAX_WARP_CPU'  # set to 1: run Warp on its CPU device all the same
+
+
+def device_problem(scene: SceneConfig) -> str | None:
+  """Why `scene` should not run on this machine, in one line, or None: Warp named where it finds
+  no CUDA device (it would fall back to its CPU device, which trains far slower than native
+  MuJoCo on a CPU: docs/results/warp.md), unless the environment variable
+  `FORCE_WARP_CPU` is 1 (the tests run Warp on the CPU on purpose)."""
+  if resolve_backend(scene) != 'warp' or os.environ.get(FORCE_WARP_CPU) == '1':
+    return None
+  import warp  # noqa: PLC0415 (the gpu extra; only a Warp run needs it)
+  if warp.is_cuda_available():
+    return None
+  return ('scene.backend=warp (the gpu preset): Warp finds no CUDA device here and would run on '
+          'its CPU device, far slower than native MuJoCo; on a CPU use --config default, or set '
+          f'{FORCE_WARP_CPU}=1 to run Warp on the CPU all the same')
 
 
 def initial_state(scene: Scene) -> SimState:

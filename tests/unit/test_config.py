@@ -219,3 +219,24 @@ def test_saved_config_without_the_winning_policy_fields_keeps_the_papers_rule():
   assert export.deploy_unsupported(trained) == 'perception.fill_unseen=true'
   assert export.deploy_unsupported(resolve('tiny', ['perception.failed_grasp_changes=false'])
                                    ) is None  # deploy's `changed` takes the grasp's outcome
+
+
+def test_warp_without_a_cuda_device_is_refused_unless_forced(tmp_path, monkeypatch):
+  """The gpu preset on a machine where Warp finds no CUDA device (every CI machine): training is
+  refused in one line naming the CPU's preset, before anything compiles or is written; the
+  environment variable runs it all the same; native MuJoCo is never refused."""
+  import warp
+
+  from mvcoba_jax.learner.train import TrainError, train
+  from mvcoba_jax.sim import physics
+  if warp.is_cuda_available():
+    pytest.skip('Warp finds a CUDA device here')
+  monkeypatch.delenv(physics.FORCE_WARP_CPU, raising=False)
+  gpu = resolve('gpu')
+  assert '--config default' in physics.device_problem(gpu.scene)
+  assert physics.device_problem(resolve('default').scene) is None
+  with pytest.raises(TrainError, match='Warp finds no CUDA device here'):
+    train(resolve('tiny', ['scene.backend=warp']), tmp_path / 'run')
+  assert not (tmp_path / 'run').exists()
+  monkeypatch.setenv(physics.FORCE_WARP_CPU, '1')
+  assert physics.device_problem(gpu.scene) is None
