@@ -13,6 +13,7 @@ import fcntl
 import os
 import pathlib
 import shutil
+import tempfile
 
 from mvcoba_jax.config import Error
 
@@ -36,9 +37,9 @@ def check(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: 
     parent = next(p for p in path.absolute().parents if p.exists())
     if not parent.is_dir():
       raise FolderError(f'{path}: {parent} is a file, not a folder')
-    if not os.access(parent, os.W_OK | os.X_OK):
-      raise FolderError(f'{path}: {parent} is not writable')
+    _writable(parent, path)
     return path
+  _writable(path, path)
   if path.resolve() not in _held and (path / LOCK_NAME).exists():  # none: nobody holds it
     _lock(path).close()  # closing the file releases the lock
   found = [name for name in earlier if (path / name).exists()]
@@ -47,6 +48,17 @@ def check(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: 
     raise FolderError(f'{path} holds results of an earlier run ({", ".join(found)}); pass '
                       f'{keeping}--overwrite to replace them, or choose another folder')
   return path
+
+
+def _writable(folder: pathlib.Path, named: pathlib.Path) -> None:
+  """FolderError unless a file can be made in `folder`: a probe made and removed at once, since
+  `os.access` says yes to root on file systems that refuse every write (/proc, read-only
+  mounts)."""
+  try:
+    with tempfile.TemporaryFile(dir=folder):
+      pass
+  except OSError as e:
+    raise FolderError(f'{named}: {folder} is not writable ({e.strerror})') from None
 
 
 def claim(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: bool = False,

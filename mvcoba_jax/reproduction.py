@@ -69,6 +69,9 @@ def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
                                                               PROTOCOLS)]
   workdir, out = arguments.path(call, 'workdir', workdir), arguments.path(call, 'out', out)
   say = print if arguments.flag(call, 'progress', progress) else (lambda *a, **k: None)
+  if out.resolve() == workdir.resolve() or workdir.resolve() in out.resolve().parents:
+    raise api.EvaluationError(f'{call}: out {out} lies in workdir {workdir}: the results go '
+                              'apart from the runs (choose another --out)')
   try:  # what the evaluation would refuse, refused before the sweep trains
     files = suite_files(list(suites))
     api.check_work(runs, max_actions, files)

@@ -264,25 +264,31 @@ def read_results(path: pathlib.Path, purpose: str = '') -> dict:
   return data
 
 
-def kept_rows(out: pathlib.Path, settings: dict[tuple[str, str], dict]) -> tuple[dict, list]:
+def kept_rows(out: pathlib.Path, settings: dict[tuple[str, str], dict]
+              ) -> tuple[dict, list, list]:
   """(the rows of `out`/results.json that a resumed evaluation keeps, as a report; the (suite,
-  row) of those this invocation does not evaluate): every row evaluated with the `settings` of
-  its (suite, row), and every row of another suite, policy or protocol, which it leaves as it
-  was. Empty when there is no such file; a kept row that does not hold together is refused."""
+  row) of those this invocation does not evaluate; the (suite, row, the settings that differ)
+  of those it evaluates again because they were evaluated otherwise): every row evaluated with
+  the `settings` of its (suite, row), and every row of another suite, policy or protocol, which
+  it leaves as it was. Empty when there is no such file; a kept row that does not hold together
+  is refused."""
   path = out / 'results.json'
   if not path.exists():
-    return {}, []
+    return {}, [], []
   data = read_results(path, ' to resume')
-  report, others = {}, []
+  report, others, redone = {}, [], []
   for suite, rows in data.items():
     for label, row in rows.items():
       wanted = settings.get((suite, label))
       if wanted is None:
         others.append((suite, label))
       elif not (isinstance(row, dict) and row.get('settings') == wanted):
+        had = row.get('settings') if isinstance(row, dict) else None
+        had = had if isinstance(had, dict) else {}
+        redone.append((suite, label, sorted(k for k in wanted if had.get(k) != wanted[k])))
         continue
       report.setdefault(suite, {})[label] = rescored(row, f'{path}: {suite}/{label}')
-  return report, others
+  return report, others, redone
 
 
 def in_order(report: dict, keys) -> dict:

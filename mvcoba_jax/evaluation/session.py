@@ -124,7 +124,8 @@ def evaluate(spec: EvalSpec) -> dict:
     settings = {(suite, label): row_settings(spec, source, cases, suites.moves.get(suite))
                 for suite, cases in suites.cases.items()
                 for label, source in zip(labels, sources)}
-    report, others = (report_lib.kept_rows(spec.out, settings) if spec.resume else ({}, []))
+    report, others, redone = (report_lib.kept_rows(spec.out, settings) if spec.resume
+                              else ({}, [], []))
   except (config_lib.ConfigError, ScenarioError, PolicyError, report_lib.ResultsError,
           folders.FolderError) as e:
     raise EvaluationError(str(e)) from None
@@ -140,6 +141,9 @@ def evaluate(spec: EvalSpec) -> dict:
   if others:
     spec.say(f'kept {len(others)} rows of {out / "results.json"} that this evaluation does not '
              f'redo: {", ".join(f"{suite}/{label}" for suite, label in others)}')
+  for suite, label, fields in redone:
+    spec.say(f'replacing {suite}/{label} of {out / "results.json"}: it was evaluated with other '
+             f'{", ".join(fields) or "settings"}')
   try:
     return _evaluate(spec, suites.cases, labels, sources, settings, report, base)
   finally:

@@ -132,10 +132,16 @@ def test_reproduction_refuses_what_its_evaluation_would_before_training(tmp_path
   for argv, says in ((['--runs', '1000000000'], '--runs 1000000000 x 12 cases of suite occluded'),
                      (['--max-actions', '0'], '--max-actions 0: allowed range'),
                      (['--workdir', str(tmp_path / 'file')], 'is a file, not a folder'),
-                     (['--out', str(tmp_path / 'file' / 'x')], 'file is a file, not a folder')):
+                     (['--out', str(tmp_path / 'file' / 'x')], 'file is a file, not a folder'),
+                     (['--out', '/proc/mvcoba'], '/proc is not writable'),
+                     (['--workdir', str(tmp_path / 'w'), '--out', str(tmp_path / 'w' / 'r')],
+                      'lies in workdir'),
+                     (['--workdir', str(tmp_path / 'w'), '--out', str(tmp_path / 'w')],
+                      'lies in workdir')):
     (tmp_path / 'file').write_text('')
     assert reproduce.main(['--config', 'tiny', '--suites', 'occluded', '--out',
-                           str(tmp_path / 'out'), *argv]) == 2
+                           str(tmp_path / 'out'), '--workdir', str(tmp_path / 'sweep'),
+                           *argv]) == 2
     assert says in capsys.readouterr().err
   assert time.perf_counter() - started < 20 and not (tmp_path / 'sweep').exists()
 

@@ -130,8 +130,9 @@ def test_resumed_evaluation_keeps_rows_of_the_same_settings_and_every_row_it_doe
              'occluded': {'cpg': row}}  # another suite: kept
   (tmp_path / 'results.json').write_text(json.dumps(written))
   wanted = {(s, m): settings for s in ('ordered', 'random') for m in ('vpg', 'mvcoba')}
-  kept, others = report.kept_rows(tmp_path, wanted)
+  kept, others, redone = report.kept_rows(tmp_path, wanted)
   assert others == [('random', 'mvcoba [online]'), ('occluded', 'cpg')]
+  assert redone == [('random', 'vpg', ['step']), ('ordered', 'mvcoba', sorted(settings))]
   assert list(kept) == ['random', 'occluded'] and list(kept['random']) == ['mvcoba',
                                                                              'mvcoba [online]']
   mean = kept['random']['mvcoba']['mean']  # scored again: no grasp succeeded, none undefined
@@ -140,7 +141,7 @@ def test_resumed_evaluation_keeps_rows_of_the_same_settings_and_every_row_it_doe
                             wanted)
   assert list(ordered) == ['ordered', 'random'] and list(ordered['random']) == ['vpg', 'mvcoba',
                                                                                 'x']
-  assert report.kept_rows(tmp_path / 'none', wanted) == ({}, [])
+  assert report.kept_rows(tmp_path / 'none', wanted) == ({}, [], [])
   (tmp_path / 'results.json').write_text('{')
   with pytest.raises(report.ResultsError, match='results.json: cannot read'):
     report.kept_rows(tmp_path, wanted)
