@@ -69,14 +69,21 @@ def json_safe(tree):
   return None if isinstance(tree, float) and not math.isfinite(tree) else tree
 
 
+def cell(text: str) -> str:
+  """`text` as one Markdown table cell: a '|' in a case or folder name escaped, a line break
+  made a space."""
+  return str(text).replace('\\', '\\\\').replace('|', '\\|').replace('\n', ' ')
+
+
 def table(rows: dict[str, dict[str, dict]], key: str, label: str, cases: list[str]) -> str:
   """A Markdown table: methods as rows, cases and their mean as columns ('-': undefined/not run)."""
-  head = f'| {label} | ' + ' | '.join(cases) + ' | mean |\n|---|' + '---|' * (len(cases) + 1)
+  head = (f'| {label} | ' + ' | '.join(map(cell, cases)) + ' | mean |\n|---|'
+          + '---|' * (len(cases) + 1))
   lines = [head]
   for method, result in rows.items():
     cells = [result['cases'].get(c, {}).get(key, math.nan) for c in cases] + [result['mean'][key]]
-    lines.append(f'| {method} | ' + ' | '.join('-' if not math.isfinite(v) else f'{v:.1f}'
-                                                for v in cells) + ' |')
+    lines.append(f'| {cell(method)} | ' + ' | '.join('-' if not math.isfinite(v) else f'{v:.1f}'
+                                                      for v in cells) + ' |')
   return '\n'.join(lines)
 
 
@@ -188,7 +195,7 @@ def per_seed_cell(values) -> str:
 def interval_table(over_seeds: dict[str, dict]) -> str:
   head = ('| method | seeds | ' + ' | '.join(label for _, label in METRICS)
           + ' | grasp success per seed |\n|---|---|' + '---|' * (len(METRICS) + 1))
-  return '\n'.join([head] + [f'| {m} | {e["seeds"]} | ' + ' | '.join(interval_cell(e[k]) for k, _ in METRICS)
+  return '\n'.join([head] + [f'| {cell(m)} | {e["seeds"]} | ' + ' | '.join(interval_cell(e[k]) for k, _ in METRICS)
                              + f' | {per_seed_cell(e["per_seed"]["grasp_success"])} |'
                              for m, e in over_seeds.items()])
 
@@ -359,15 +366,24 @@ def fitting_settings(settings, by_case: dict, where: str) -> None:
   per case, action cap and the objects each case file lists (each that the settings hold)."""
   if not isinstance(settings, dict):
     raise ResultsError(f'{where}.settings: expected an object, got {str(settings)[:40]!r}')
-  cases, runs, cap = settings.get('cases'), settings.get('runs'), settings.get('max_actions')
+  for key in ('cases', 'runs', 'max_actions'):
+    if key not in settings or settings[key] is None:
+      raise ResultsError(f'{where}.settings.{key}: missing; the row cannot be checked (evaluate '
+                         'it again)')
+  for key in ('runs', 'max_actions', 'seed', 'step'):
+    value = settings.get(key, 0)
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+      raise ResultsError(f'{where}.settings.{key}: expected a count, got {str(value)[:40]!r}')
+  cases, runs, cap = settings['cases'], settings['runs'], settings['max_actions']
   listed = settings.get('listed_objects')
-  if cases is not None and (not isinstance(cases, list) or sorted(cases) != sorted(by_case)):
+  if not isinstance(cases, list) or not all(isinstance(c, str) for c in cases) or sorted(
+      cases) != sorted(by_case):
     raise ResultsError(f'{where}.settings.cases: {str(cases)[:80]} are not the cases of its runs '
                        f'({", ".join(sorted(by_case))[:80]})')
   for name, logs in by_case.items():
-    if runs is not None and len(logs) != runs:
+    if len(logs) != runs:
       raise ResultsError(f'{where}.runs.{name}: {len(logs)} runs where its settings say {runs}')
-    if cap is not None and any(log.actions > cap for log in logs):
+    if any(log.actions > cap for log in logs):
       raise ResultsError(f'{where}.runs.{name}: a run took more actions than the cap of {cap} '
                          'its settings give')
     if (isinstance(listed, dict) and isinstance(listed.get(name), int)

@@ -72,6 +72,11 @@ def test_rows_that_do_not_fit_their_own_settings_are_refused_naming_the_field(tm
        'picked 1 objects without a successful grasp'),
       (lambda r: r.update(wall_s=-5), 'wall_s'),
       (lambda r: r.update(wall_s=1e308), 'wall_s'),
+      (lambda r: r['settings'].update(max_actions='1'), "settings.max_actions: expected a count"),
+      (lambda r: r['settings'].update(runs=True), 'settings.runs: expected a count'),
+      (lambda r: r['settings'].pop('runs'), 'settings.runs: missing'),
+      (lambda r: r['settings'].update(cases=None), 'settings.cases: missing'),
+      (lambda r: r['settings'].update(cases=[0]), 'settings.cases'),
   ]
   for i, (edit, says) in enumerate([(lambda r: None, None)] + tampered):
     data = copy.deepcopy(good)
@@ -85,3 +90,15 @@ def test_rows_that_do_not_fit_their_own_settings_are_refused_naming_the_field(tm
       assert code == 0, err
     else:
       assert code == 2 and says in err and err.count('\n') == 1, (says, err)
+
+
+def test_a_bar_in_a_case_name_stays_inside_its_cell(tmp_path):
+  """Case and row names go into Markdown cells escaped: a '|' does not add a column."""
+  from mvcoba_jax.evaluation import report
+  data = copy.deepcopy(VALID)
+  row = data['ordered']['mvcoba']
+  row['runs'] = {'a|b': row['runs']['c0']}
+  rescored = {'mvcoba|x': report.rescored(row, 'r')}
+  text = report.table(rescored, 'grasp_success', 'grasp success', ['a|b'])
+  head, rule, line = text.splitlines()
+  assert head.count(' | ') == line.count(' | ') == 2 and 'a\\|b' in head and 'mvcoba\\|x' in line
