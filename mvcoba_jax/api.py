@@ -17,9 +17,11 @@ from mvcoba_jax.evaluation.session import (RESULT_FILES, EvalSpec, EvaluationErr
 from mvcoba_jax.evaluation.session import evaluate as evaluate_spec
 from mvcoba_jax.learner.train import (RUN_FILES, TrainError, TrainResult, resumable, sweep,
                                       sweep_runs, train)
+from mvcoba_jax.policy import Policy
 from mvcoba_jax.policy import load as load_policy
 
-__all__ = ['Error', 'EvalSpec', 'EvaluationError', 'RESULT_FILES', 'RUN_FILES', 'TrainError',
+__all__ = ['Error', 'EvalSpec', 'EvaluationError', 'Policy', 'RESULT_FILES', 'RUN_FILES',
+           'TrainError',
            'TrainResult', 'check_work', 'evaluate', 'join_evaluations', 'load_policy',
            'resumable', 'sweep', 'sweep_runs', 'train']
 

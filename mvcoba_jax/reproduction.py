@@ -19,7 +19,7 @@ from mvcoba_jax import api, arguments, folders
 from mvcoba_jax import methods as methods_lib
 from mvcoba_jax.config import Config, ConfigError, validate
 from mvcoba_jax.evaluation import paper
-from mvcoba_jax.evaluation.protocols import PROTOCOLS as PROTOCOLS_BY_NAME
+from mvcoba_jax.evaluation import protocols as protocols_lib
 from mvcoba_jax.evaluation.report import write_whole
 from mvcoba_jax.learner.run_log import plot_sweep
 from mvcoba_jax.learner.train import started, sweep_runs
@@ -30,7 +30,7 @@ from mvcoba_jax.suites import suite_files
 # 54144 actions in 88 min, 1350 case runs in 55 min): what the expected wall time is computed from.
 TRAIN_ACTIONS_PER_S = 10.0
 FROZEN_S_PER_CASE_RUN = 2.5  # each protocol's `cost` times this
-PROTOCOLS = ('frozen', 'online')  # the paper's two: `evaluation.protocols.PROTOCOLS` names them
+PROTOCOLS = tuple(p.name for p in protocols_lib.PAPER)  # names: the command line's choices
 
 
 # method -> the preset it trains with in the reproduction: the one it validated best with in the
@@ -65,8 +65,8 @@ def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
   runs, max_actions = (arguments.count(call, n, v, -2 ** 63, 2 ** 63)
                        for n, v in (('runs', runs), ('max_actions', max_actions)))
   suites = arguments.names(call, 'suites', suites)
-  protocols = [PROTOCOLS_BY_NAME[p] for p in arguments.names(call, 'protocols', protocols,
-                                                              PROTOCOLS)]
+  protocols = [protocols_lib.PROTOCOLS[p] for p in arguments.names(call, 'protocols', protocols,
+                                                                   PROTOCOLS)]
   workdir, out = arguments.path(call, 'workdir', workdir), arguments.path(call, 'out', out)
   say = print if arguments.flag(call, 'progress', progress) else (lambda *a, **k: None)
   if out.resolve() == workdir.resolve() or workdir.resolve() in out.resolve().parents:

@@ -40,6 +40,7 @@ NO_REPEAT = Protocol('no-repeat', 'the trained network, frozen, never repeats a 
                      'its run while nothing has changed (its next best one instead)',
                      no_repeat=True)
 PROTOCOLS = {p.name: p for p in (FROZEN, ONLINE, NO_REPEAT)}
+PAPER = (FROZEN, ONLINE)  # the paper's two: what mvcoba-reproduce runs
 
 
 def labelled(row: str, name: str | None) -> str:

@@ -84,3 +84,12 @@ def test_every_bad_argument_is_one_line_naming_it(tmp_path):
     tried += 1
   assert tried > 200
   assert sorted(p.name for p in tmp_path.iterdir()) == []  # nothing made
+
+
+def test_every_name_of_the_api_is_reachable_from_the_package():
+  """`mvcoba_jax.X` for every name of api.__all__ (Policy among them) and `reproduce`."""
+  import mvcoba_jax
+  from mvcoba_jax import api
+  assert 'Policy' in api.__all__
+  for name in [*api.__all__, 'reproduce']:
+    assert getattr(mvcoba_jax, name) is not None, name
