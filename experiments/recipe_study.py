@@ -31,74 +31,10 @@ import subprocess
 import sys
 import time
 
+import recipe_table
+from recipe_variants import CONTINUES, ROOT, VALIDATION, VARIANTS
+
 from mvcoba_jax.learner.checkpoint import holds_checkpoint
-
-ROOT = pathlib.Path(__file__).resolve().parent.parent
-VALIDATION = ROOT / 'docs' / 'results' / 'validation'
-
-# variant -> mvcoba-train arguments. The single changes are screened from the paper text's
-# recipe (the default preset when the screen began); the `nofresh_` variants from the default
-# preset the screen chose (the authors' recipe without the update's fresh transitions); `width_`
-# and `turned_stems` make today's default's acting forward cheaper (a narrower trunk, the stems
-# run once per state: benchmarks/acting_forward.py), `shared2_quarter_turns` with replayed
-# transitions turned by quarter turns to teach it the symmetry it gives up (on today's network,
-# which holds that symmetry exactly, the turns change nothing); `packed` adds packed training
-# drops, for the packed validation cases.
-PAPER_TEXT = ['--config', 'paper_text']
-NOFRESH = ['--config', 'authors', '--set', 'train.fresh_in_batch=false']
-OCCLUDED = NOFRESH + ['--set', 'env.occluded_share=0.25']  # the default preset at 3000 actions
-SCREEN_BASE = ['--config', 'default', '--set', 'train.total_actions=3000']  # preset_default
-VARIANTS = {
-    'paper_text': PAPER_TEXT,
-    'targets': PAPER_TEXT + ['--set', 'train.bootstrap_no_change=false',
-                             '--set', 'train.failed_grasp_reward=0'],
-    'authors': ['--config', 'authors'],
-    'authors_nofresh': NOFRESH,
-    'heap': PAPER_TEXT + ['--set', 'env.drop=heap'],
-    'fresh': PAPER_TEXT + ['--set', 'train.fresh_in_batch=true'],
-    'symmetry': PAPER_TEXT + ['--set', 'train.grasp_symmetry=true'],
-    'future_both': PAPER_TEXT + ['--set', 'train.future_max=both'],
-    'push_penalty': PAPER_TEXT + ['--set', 'train.no_change_push_reward=-1'],
-    'occlusion': PAPER_TEXT + ['--set', 'env.occluded_share=0.25'],
-    'nofresh_occlusion': OCCLUDED,
-    'nofresh_pad': NOFRESH + ['--set', 'network.pad_to_diagonal=true'],
-    'nofresh_shared2': NOFRESH + ['--set', 'network.shared_stages=2'],
-    'nofresh_occlusion_shared2': OCCLUDED + ['--set', 'network.shared_stages=2'],
-    'width_16_32_32': OCCLUDED + ['--set', 'network.features=16,32,32'],
-    'width_16_32_32_turned_stems': OCCLUDED + ['--set', 'network.features=16,32,32',
-                                               '--set', 'network.shared_stages=1'],
-    'packed': OCCLUDED + ['--set', 'env.packed_share=0.25'],
-    'turned_stems': OCCLUDED + ['--set', 'network.shared_stages=1'],
-    'shared2_quarter_turns': OCCLUDED + ['--set', 'network.shared_stages=2',
-                                         '--set', 'train.quarter_turns=true'],
-    'default_6000': OCCLUDED + ['--set', 'train.total_actions=6000'],
-    'default_12000': OCCLUDED + ['--set', 'train.total_actions=12000'],
-    # The presets of the day at the reproduction's 3000 actions, for each method's best recipe.
-    'preset_paper_text': ['--config', 'paper_text'],
-    'preset_authors': ['--config', 'authors'],
-    'preset_default': ['--config', 'default', '--set', 'train.total_actions=3000'],
-    # The reproduction's preset_default (3000 actions, 8 tabletops, one update per lockstep
-    # action) at more tabletops in lockstep, with and without the replay ratio kept
-    # (`train.replay_ratio=1`: 8 sampled per 8 new transitions, as preset_default's B=8).
-    'batch_32_ratio': ['--config', 'default', '--set', 'train.total_actions=3000',
-                       '--set', 'num_envs=32', '--set', 'train.replay_ratio=1'],
-    'batch_64_ratio': ['--config', 'default', '--set', 'train.total_actions=3000',
-                       '--set', 'num_envs=64', '--set', 'train.replay_ratio=1'],
-    'batch_64': ['--config', 'default', '--set', 'train.total_actions=3000',
-                 '--set', 'num_envs=64'],
-    # Issue 65's candidates, each from preset_default: CPG's suppression in MV-COBA's change
-    # rule, a push after a failed grasp, unseen cells filled from the other view, and all three.
-    'suppress': SCREEN_BASE + ['--set', 'network.suppress=true'],
-    'failed_grasp_push': SCREEN_BASE + ['--set', 'perception.failed_grasp_changes=false'],
-    'fill_unseen': SCREEN_BASE + ['--set', 'perception.fill_unseen=true'],
-    'suppress_push_fill': SCREEN_BASE + ['--set', 'network.suppress=true',
-                                         '--set', 'perception.failed_grasp_changes=false',
-                                         '--set', 'perception.fill_unseen=true'],
-}
-# variant -> the variant whose finished run it resumes to more actions. The same as training
-# that long in one go: nothing in the recipe reads the total (constant learning rate, exploration
-# decayed over the first 800 actions), and a checkpoint holds the whole training state.
-CONTINUES = {'default_6000': 'nofresh_occlusion', 'default_12000': 'default_6000'}
 
 
 def run_name(variant: str, method: str, seed: int) -> str:
@@ -130,7 +66,6 @@ def run(command: list[str], log: pathlib.Path, what: str) -> bool:
 def cannot_change_choice(variant: str, method: str, *works) -> bool:
   """Whether a run of the per-method screen is futile: its preset is ruled out for the method
   by the evaluations already finished (`recipe_table.ruled_out`)."""
-  import recipe_table  # it imports this module's VARIANTS
   preset = next((p for p, v in recipe_table.SCREEN.items() if v == variant), None)
   if preset is None:
     return False

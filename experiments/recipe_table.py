@@ -17,7 +17,7 @@ import json
 import pathlib
 import statistics
 
-from recipe_study import ROOT, VARIANTS
+from recipe_variants import ROOT, VARIANTS
 
 from mvcoba_jax.evaluation import paper, report
 
