@@ -54,17 +54,19 @@ def by_suite_name(folders: list[str]) -> dict:
   return merged
 
 
-def evaluations(*works: pathlib.Path) -> dict[str, list[str]]:
-  """row (VARIANT or VARIANT-METHOD) -> its finished evaluation folders, one per seed (a run
-  evaluated in several of `works`, as a study and its landed copy, counts once)."""
+def evaluations(*works: pathlib.Path, kinds=('eval',)) -> dict[str, list[str]]:
+  """row (VARIANT or VARIANT-METHOD) -> its finished evaluation folders, one per seed and kind
+  (`kinds`: eval/, and eval-high/ of the suites evaluated apart later); a run evaluated in
+  several of `works`, as a study and its landed copy, counts once."""
   found = {}
   for work in works:
-    for folder in sorted((work / 'eval').iterdir()) if (work / 'eval').is_dir() else []:
-      if (folder / 'done').is_file():
-        found.setdefault(folder.name, str(folder))
+    for kind in kinds:
+      for folder in sorted((work / kind).iterdir()) if (work / kind).is_dir() else []:
+        if (folder / 'done').is_file():
+          found.setdefault((kind, folder.name), str(folder))
   rows = {}
-  for name in sorted(found):
-    rows.setdefault(name.rsplit('-s', 1)[0], []).append(found[name])
+  for kind, name in sorted(found, key=lambda key: (key[1], kinds.index(key[0]))):
+    rows.setdefault(name.rsplit('-s', 1)[0], []).append(found[kind, name])
   return rows
 
 
@@ -132,8 +134,8 @@ def choice_table(work: pathlib.Path) -> str:
                                      f'to run score, and they are not run.'])
 
 
-def table(work: pathlib.Path, metrics=METRICS) -> str:
-  evaluations_of = evaluations(work)
+def table(work: pathlib.Path, metrics=METRICS, kinds=('eval',)) -> str:
+  evaluations_of = evaluations(work, kinds=kinds)
   minutes = training_minutes(work / 'study.jsonl')
   order = lambda row: (list(VARIANTS).index(row.split('-')[0]), row)
   joined = {row: by_suite_name(evaluations_of[row])
@@ -146,7 +148,7 @@ def table(work: pathlib.Path, metrics=METRICS) -> str:
       over = report.seed_intervals(by_suite.get(suite, {}), minimum=1)
       entry = next(iter(over.values()), {})
       cells += [report.interval_cell(entry.get(m)) for m in metrics]
-    seeds = len(evaluations_of[variant])
+    seeds = len({pathlib.Path(f).name for f in evaluations_of[variant]})
     took = f'{minutes[variant]:.1f}' if variant in minutes else '-'
     lines.append(f'| {variant} | {seeds} | ' + ' | '.join(cells) + f' | {took} |')
   head = ('| variant | seeds | ' + ' | '.join(f'{s}: {m.replace("_", " ")}' for s in suites
@@ -159,11 +161,14 @@ def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--workdir', default='runs/recipe')
   parser.add_argument('--metrics', nargs='+', default=list(METRICS))
+  parser.add_argument('--kinds', nargs='+', default=['eval'],
+                      help='the folders of evaluations to join: eval, and eval-high of the '
+                           'validation suites evaluated apart later')
   parser.add_argument('--choose', action='store_true',
                       help='each screened method\'s score per preset and the preset it trains with')
   args = parser.parse_args()
   work = (ROOT / args.workdir).resolve()
-  print(choice_table(work) if args.choose else table(work, args.metrics))
+  print(choice_table(work) if args.choose else table(work, args.metrics, tuple(args.kinds)))
 
 
 if __name__ == '__main__':
