@@ -65,14 +65,6 @@ def onnx_model(config: Config, model: networks.QNetwork):
                  input_names=['color', 'depth'], output_names=list(outputs))
 
 
-def deploy_unsupported(config: Config) -> str | None:
-  """The first setting of `config` that model.json cannot carry to a runtime outside JAX, or
-  None: the deploy path builds each view's heightmap alone."""
-  if config.perception.fill_unseen:
-    return 'perception.fill_unseen=true'
-  return None
-
-
 def output_names(suppress: bool) -> tuple[str, ...]:
   """The graph's outputs: Q maps, and where the rule suppresses the scores it compares."""
   return ('q', 'score') if suppress else ('q',)
@@ -204,10 +196,6 @@ def export(workdir, out, results=(), commit: str | None = None,
   except folders.FolderError as e:
     raise PolicyError(str(e)) from None
   config, model, step = load(workdir)
-  unsupported = deploy_unsupported(config)
-  if unsupported:
-    raise PolicyError(f'{workdir}: trained with {unsupported}, which the deploy path does not '
-                      'reproduce yet; it cannot be exported')
   measured = figures(results, model)
   flat = flat_params(model)
   proto = onnx_model(config, model)

@@ -11,6 +11,7 @@ import jax.numpy as jnp
 from flax import struct
 
 from mvcoba_jax.config import Config, PerceptionConfig
+from mvcoba_jax.deploy.heightmaps import filled
 from mvcoba_jax.sim import cameras
 from mvcoba_jax.sim.geometry import world_to_pixel
 
@@ -69,20 +70,8 @@ def observe(env, state) -> Observation:
   maps = [heightmap(image, colors, env.config) for image in cameras.render(env, state)]
   color, depth, seen = (jnp.stack(parts) for parts in zip(*maps))
   if env.config.perception.fill_unseen:
-    color, depth = filled(color, depth, seen)
+    color, depth = filled(color, depth, seen, jnp)
   return Observation(color=color, depth=depth, seen=seen)
-
-
-def filled(color, depth, seen):
-  """(color, depth) of views (V, R, R[, 3]) whose unseen cells take the highest point any other
-  view saw there, with its colour (`perception.fill_unseen`); cells no view saw stay 0."""
-  best = jnp.argmax(jnp.where(seen, depth, -1.0), axis=0)[None]  # (1, R, R): the highest view
-  any_seen = jnp.any(seen, axis=0)
-  fill_depth = jnp.where(any_seen, jnp.take_along_axis(depth, best, axis=0)[0], 0.0)
-  fill_color = jnp.where(any_seen[..., None],
-                         jnp.take_along_axis(color, best[..., None], axis=0)[0], 0.0)
-  return (jnp.where(seen[..., None], color, fill_color[None]),
-          jnp.where(seen, depth, fill_depth[None]).astype(depth.dtype))
 
 
 def change_counts(before: Observation, after: Observation, config: PerceptionConfig):

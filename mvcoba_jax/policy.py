@@ -21,6 +21,7 @@ from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Config, Error
 from mvcoba_jax.deploy import checks, model_file
 from mvcoba_jax.deploy.calibration import DeployError
+from mvcoba_jax.deploy.heightmaps import filled
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.learner.checkpoint import CheckpointError, Checkpoints, incompatibilities
@@ -60,10 +61,13 @@ class Policy(typing.NamedTuple):
     return np.asarray(self.network(jnp.asarray(color, jnp.float32)[None],
                                    jnp.asarray(depth, jnp.float32)[None])[0])
 
-  def act(self, color, depth, changed: bool = True) -> Decision:
+  def act(self, color, depth, changed: bool = True, seen=None) -> Decision:
     """The greedy action on one observation (`q_maps`' arguments): the method's rule picks the
     primitive (MV-COBA's: grasp when the last action changed the scene, `changed`, else push;
     model.json's `action_rule` says each method's) and the argmax rotation and cell of its map.
+    `seen` (V, R, R) bool, which cells each view saw, is needed by a policy trained with
+    `perception.fill_unseen`, which fills each view's unseen cells from the others as training
+    did (`perception.Observation.seen`).
 
     The observation is checked before the network and the action after it (`deploy.checks`):
     PolicyError names what is refused (another grid or number of views, heights not in metres,
@@ -77,6 +81,8 @@ class Policy(typing.NamedTuple):
     try:
       color, depth = checks.observation(color, depth, len(config.scene.cameras),
                                         perception.grid_size(config), top)
+      if config.perception.fill_unseen:
+        color, depth = filled(color, depth, checks.seen(seen, depth))
     except checks.Refused as e:
       raise PolicyError(f'observation refused: {e}') from None
     depth = jnp.asarray(depth)[None]

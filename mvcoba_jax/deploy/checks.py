@@ -60,6 +60,18 @@ def observation(color, depth, views: int, side: int, top: float
   return color.astype(np.float32), np.clip(depth, 0.0, None).astype(np.float32)
 
 
+def seen(values, depth: np.ndarray) -> np.ndarray:
+  """The observation's seen mask (V, R, R) as booleans of the depth's shape; raises Refused
+  naming what is wrong (missing, another shape, not booleans)."""
+  if values is None:
+    raise Refused('seen is needed: this policy fills each view\'s unseen cells from the others')
+  mask = np.asarray(values)
+  if mask.shape != depth.shape or mask.dtype != np.bool_:
+    raise Refused(f'seen of shape {mask.shape} and dtype {mask.dtype}: booleans of the depth\'s '
+                  f'shape {depth.shape}')
+  return mask
+
+
 def action(q: float, angle: float, position: tuple[float, float, float], half: float,
            top: float) -> None:
   """Raises Refused unless the action has a finite score and angle and its workspace position

@@ -85,3 +85,15 @@ def heightmaps(depths, calibration: Calibration, colors=None):
       flat[cell[top]] = rgb[top]
   return out_color, out_depth, out_seen
 
+
+def filled(color, depth, seen, xp=np):
+  """(color, depth) of views (V, R, R[, 3]) whose unseen cells take the highest point any other
+  view saw there, with its colour (`perception.fill_unseen`); cells no view saw stay 0. `xp` is
+  numpy here and jax.numpy in training (`perception.observe`): one rule on both sides."""
+  best = xp.argmax(xp.where(seen, depth, -1.0), axis=0)[None]  # (1, R, R): the highest view
+  any_seen = xp.any(seen, axis=0)
+  fill_depth = xp.where(any_seen, xp.take_along_axis(depth, best, axis=0)[0], 0.0)
+  fill_color = xp.where(any_seen[..., None],
+                        xp.take_along_axis(color, best[..., None], axis=0)[0], 0.0)
+  return (xp.where(seen[..., None], color, fill_color[None]).astype(color.dtype),
+          xp.where(seen, depth, fill_depth[None]).astype(depth.dtype))

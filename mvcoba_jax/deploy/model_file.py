@@ -37,6 +37,7 @@ class ModelFile:
   change_max: float
   change_area: float
   failed_grasp_changes: bool  # False: a grasp that held nothing is no change (absent: True)
+  fill_unseen: bool  # each view's unseen cells filled from the others first (absent: False)
 
 
 def read(folder) -> ModelFile:
@@ -89,12 +90,13 @@ def read(folder) -> ModelFile:
     raise DeployError(f'{path}: config.perception.heightmap_resolution is not '
                       'heightmap.resolution_m')
   perception = raw['config']['perception']
-  failed_grasp_changes = perception.get('failed_grasp_changes', True)
-  if type(failed_grasp_changes) is not bool:
-    raise DeployError(f'{path}: config.perception.failed_grasp_changes '
-                      f'{str(failed_grasp_changes)[:40]!r}: true or false expected')
-  return ModelFile(raw=raw, rule=rule, maps=maps, push=push, grasp=grasp,
-                   failed_grasp_changes=failed_grasp_changes,
+  flags = {name: perception.get(name, default) for name, default in
+           (('failed_grasp_changes', True), ('fill_unseen', False))}
+  for name, value in flags.items():
+    if type(value) is not bool:
+      raise DeployError(f'{path}: config.perception.{name} {str(value)[:40]!r}: true or false '
+                        'expected')
+  return ModelFile(raw=raw, rule=rule, maps=maps, push=push, grasp=grasp, **flags,
                    angles_rad=tuple(float(a) for a in angles), resolution_m=res, grid_size=side,
                    workspace_half_m=half, num_views=views, views_used=tuple(used),
                    onnx_file=onnx_file, **change)

@@ -11,6 +11,7 @@ import numpy as np
 
 from mvcoba_jax.deploy import checks, model_file
 from mvcoba_jax.deploy.calibration import Calibration, DeployError
+from mvcoba_jax.deploy.heightmaps import filled
 from mvcoba_jax.deploy.model_file import RULES
 
 
@@ -95,12 +96,11 @@ class OnnxPolicy:
     try:
       color, depth = checks.observation(color, depth, spec.num_views, spec.grid_size,
                                         calibration.top)
-      seen = np.asarray(seen)
-      if seen.shape != depth.shape or seen.dtype != np.bool_:
-        raise checks.Refused(f'seen of shape {seen.shape} and dtype {seen.dtype}: booleans '
-                             f'of the depth\'s shape {depth.shape}')
+      seen = checks.seen(seen, depth)
     except checks.Refused as e:
       raise DeployError(f'refused: {e}') from None
+    if spec.fill_unseen:  # as training saw them: each view's unseen cells from the others
+      color, depth = filled(color, depth, seen)
     used = list(spec.views_used)
     blind = [calibration.cameras[v].name for v in used if not seen[v].any()]
     if blind:

@@ -158,7 +158,7 @@ def summary(results: dict[str, dict], suites=('random', 'ordered', 'occluded'),
   whole = lambda v: f'{v:.0f}'
   lines = [head]
   for method in dict.fromkeys(m for rows in over.values() for m in rows):
-    name = PAPER_NAMES.get(report.method_of(method), method)
+    name = PAPER_NAMES.get(report.method_of(method), method)  # whose figures are the paper's
     cells, seeds = [], set()
     for suite, rows in over.items():
       entry, paper = rows.get(method) or {}, RESULTS.get(suite, {}).get(name, {})
@@ -171,5 +171,5 @@ def summary(results: dict[str, dict], suites=('random', 'ordered', 'occluded'),
         if paper_key:
           cells.append(whole(paper[paper_key]) if paper_key in paper else '')
     count = '/'.join(str(s) for s in sorted(s for s in seeds if s))
-    lines.append(f'| {name} | {count} | ' + ' | '.join(cells) + ' |')
+    lines.append(f'| {report.cell(paper_name(method))} | {count} | ' + ' | '.join(cells) + ' |')
   return '\n'.join(lines)

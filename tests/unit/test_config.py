@@ -204,9 +204,7 @@ def test_a_preset_that_exits_is_a_config_error(tmp_path):
 
 def test_saved_config_without_the_winning_policy_fields_keeps_the_papers_rule():
   """Runs saved before the screen's fields existed acted by the paper's rule on each view's own
-  heightmap: they load so, without a warning, and what the deploy path cannot reproduce is
-  named so that the export refuses it."""
-  from mvcoba_jax import export  # noqa: PLC0415 (jax2onnx is not needed for this)
+  heightmap: they load so, without a warning."""
   trained = resolve('tiny', ['network.suppress=true', 'perception.fill_unseen=true',
                              'perception.failed_grasp_changes=false'])
   saved = to_dict(trained)
@@ -215,10 +213,6 @@ def test_saved_config_without_the_winning_policy_fields_keeps_the_papers_rule():
   config = from_dict(saved)
   assert not config.network.suppress and not config.perception.fill_unseen
   assert config.perception.failed_grasp_changes and defaulted(saved, config) == {}
-  assert export.deploy_unsupported(config) is None
-  assert export.deploy_unsupported(trained) == 'perception.fill_unseen=true'
-  assert export.deploy_unsupported(resolve('tiny', ['perception.failed_grasp_changes=false'])
-                                   ) is None  # deploy's `changed` takes the grasp's outcome
 
 
 def test_warp_without_a_cuda_device_is_refused_unless_forced(tmp_path, monkeypatch):
