@@ -123,3 +123,11 @@ def test_a_model_json_broken_where_an_action_depends_on_it_is_refused_naming_it(
   text = json.dumps(base).replace('"angles_rad": [0.0', '"angles_rad": [NaN', 1)
   with pytest.raises(DeployError, match='NaN is not a number JSON allows'):
     model_file.read(write(None, text))
+
+
+def test_deploy_knows_every_rule_a_method_can_have():
+  """A Rule added to methods.py without its runtime counterpart would be refused by deploy
+  (model_file.read); this test says so before any export meets it."""
+  from mvcoba_jax import methods
+  from mvcoba_jax.deploy import model_file
+  assert set(model_file.RULES) == set(methods.RULES)
