@@ -112,3 +112,19 @@ def test_the_results_are_the_reproductions_tables():
 def test_the_readme_is_for_users():
   lines = (ROOT / 'README.md').read_text().splitlines()
   assert len(lines) <= 150 and max(map(len, lines)) <= 120
+
+
+def test_every_gap_the_readme_states_is_a_separation_of_the_landed_results():
+  """Each '(gap N ...)' of the README's results prose is the gap of a separation that the
+  reproduction's results give (`paper.separations`, recomputed from results.json), to its
+  digits: a claim of 'A > B' in the README rests on intervals that are disjoint by that much."""
+  import re
+
+  from mvcoba_jax.evaluation import paper, report
+  results = report.joined_report([str(ROOT / 'docs' / 'results' / 'reproduction')])
+  gaps = [float(g) for g in re.findall(r'\(gap (-?[\d.]+)\)', paper.comparisons(results))]
+  stated = re.findall(r'\(gap (\d+(?:\.\d+)?)', (ROOT / 'README.md').read_text())
+  assert stated, 'the README states no gap'
+  for text in stated:
+    digits = len(text.partition('.')[2])
+    assert any(round(g, digits) == float(text) for g in gaps), text
