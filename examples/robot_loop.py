@@ -98,6 +98,9 @@ def main(argv=None) -> int:
   parser.add_argument('--actions', type=int, default=10)
   parser.add_argument('--seed', type=int, default=0)
   args = parser.parse_args(argv)
+  if args.actions < 1 or args.seed < 0:
+    parser.error(f'--actions {args.actions} --seed {args.seed}: at least 1 action, a seed of 0 '
+                 'or more')
   try:
     policy = OnnxPolicy(args.model)
     rig = SimulatedRig(policy.model, args.seed)

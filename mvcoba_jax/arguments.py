@@ -4,6 +4,7 @@ claimed or anything compiles. Each helper returns the value in the form the call
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import pathlib
 
@@ -75,16 +76,22 @@ def flag(call: str, name: str, value) -> bool:
   raise ArgumentError(f'{call}: {name}={_show(value)}: expected True or False')
 
 
+def _whole(value) -> bool:
+  """A whole number of Python or numpy (np.int64 from an array), not a bool."""
+  return isinstance(value, numbers.Integral) and not isinstance(value, bool) and type(
+      value).__name__ != 'bool_'
+
+
 def count(call: str, name: str, value, low: int, high: int) -> int:
-  if isinstance(value, int) and not isinstance(value, bool) and low <= value <= high:
-    return value
+  if _whole(value) and low <= value <= high:
+    return int(value)
   raise ArgumentError(f'{call}: {name}={_show(value)}: expected a whole number in [{low}, '
                       f'{high}]')
 
 
 def counts(call: str, name: str, value, low: int, high: int) -> list[int]:
   """A list of distinct whole numbers; a lone number is a list of one."""
-  items = [value] if isinstance(value, int) and not isinstance(value, bool) else value
+  items = [value] if _whole(value) else value
   if not isinstance(items, (list, tuple)) or not items:
     raise ArgumentError(f'{call}: {name}={_show(value)}: expected a list of whole numbers')
   items = [count(call, name, v, low, high) for v in items]
@@ -94,7 +101,7 @@ def counts(call: str, name: str, value, low: int, high: int) -> list[int]:
 
 
 def number(call: str, name: str, value, low: float, high: float) -> float:
-  if (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-      and low <= value <= high):
+  if (isinstance(value, numbers.Real) and not isinstance(value, bool)
+      and type(value).__name__ != 'bool_' and math.isfinite(value) and low <= value <= high):
     return float(value)
   raise ArgumentError(f'{call}: {name}={_show(value)}: expected a number in [{low:g}, {high:g}]')

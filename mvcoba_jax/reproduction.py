@@ -79,7 +79,7 @@ def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
       folders.check(folder, keep=True)
   except (folders.FolderError, ScenarioError) as e:
     raise api.EvaluationError(str(e)) from None
-  recipes = trained_for(call, config, recipes or {}, methods, actions)
+  recipes = trained_for(call, config, {} if recipes is None else recipes, methods, actions)
   trainings = len(methods) * len(seeds)
   cases = sum(len(f) for f in files.values())
   expected = (trainings * actions / TRAIN_ACTIONS_PER_S
@@ -106,6 +106,13 @@ def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
 def trained_for(call: str, config: Config, recipes: dict, methods, actions: int) -> dict:
   """method -> the config it trains with (its entry of `recipes`, else `config`) at `actions`
   actions; api.TrainError for one that cannot be built."""
+  if not isinstance(recipes, dict) or not all(isinstance(m, str) for m in recipes):
+    raise arguments.ArgumentError(f'{call}: recipes={str(recipes)[:60]!r}: expected a dict of '
+                                  'method -> Config or preset name')
+  unknown = sorted(set(recipes) - set(methods_lib.names()))
+  if unknown:
+    raise arguments.ArgumentError(f'{call}: recipes names {unknown[0]!r}, not a method (known: '
+                                  f'{", ".join(methods_lib.names())})')
   chosen = {m: arguments.config(call, recipes.get(m, config)) for m in methods}
   try:
     return {m: validate(dataclasses.replace(c, train=dataclasses.replace(

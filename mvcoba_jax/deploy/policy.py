@@ -70,9 +70,9 @@ class OnnxPolicy:
     spec = self.spec
     if (abs(calibration.half - spec.workspace_half_m) > 1e-9
         or abs(calibration.resolution - spec.resolution_m) > 1e-9):
-      raise DeployError(f'the calibration\'s workspace (half {calibration.half:g} m, resolution '
-                        f'{calibration.resolution:g} m) is not the policy\'s (half '
-                        f'{spec.workspace_half_m:g} m, resolution {spec.resolution_m:g} m)')
+      raise DeployError(f'the calibration\'s workspace (half {calibration.half!r} m, resolution '
+                        f'{calibration.resolution!r} m) is not the policy\'s (half '
+                        f'{spec.workspace_half_m!r} m, resolution {spec.resolution_m!r} m)')
     if len(calibration.cameras) != spec.num_views:
       raise DeployError(f'the calibration has {len(calibration.cameras)} cameras, the policy reads '
                         f'{spec.num_views} views')
@@ -132,7 +132,11 @@ class OnnxPolicy:
       return True
     if grasped is False and not spec.failed_grasp_changes:
       return False
-    (d0, s0), (d1, s1) = before, after
-    diff = np.abs(np.asarray(d1) - np.asarray(d0))
+    (d0, s0), (d1, s1) = (tuple(np.asarray(a) for a in frame) for frame in (before, after))
+    if (not d0.shape == s0.shape == d1.shape == s1.shape or s0.dtype != np.bool_
+        or s1.dtype != np.bool_):
+      raise DeployError(f'changed: frames of depth {d0.shape} / {d1.shape} and seen {s0.shape} / '
+                        f'{s1.shape}: two frames of one shape, seen as booleans')
+    diff = np.abs(d1 - d0)
     moved = (diff >= spec.change_min) & (diff <= spec.change_max) & s0 & s1
     return bool((moved.sum(axis=(-2, -1)) > spec.change_area / spec.resolution_m ** 2).any())

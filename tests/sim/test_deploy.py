@@ -301,3 +301,7 @@ def test_a_failed_grasp_is_no_change_for_a_policy_trained_so(scenes, onnx):
   strict.spec = dataclasses.replace(onnx.spec, failed_grasp_changes=False)
   assert not strict.changed(before, after, grasped=False)
   assert strict.changed(before, after) and strict.changed(before, before, grasped=True)
+  with pytest.raises(DeployError, match='two frames of one shape'):
+    onnx.changed(before, (after[0][:, :50], after[1][:, :50]))
+  with pytest.raises(DeployError, match='seen as booleans'):
+    onnx.changed(before, (after[0], after[1].astype(np.float32)))

@@ -93,3 +93,24 @@ def test_every_name_of_the_api_is_reachable_from_the_package():
   assert 'Policy' in api.__all__
   for name in [*api.__all__, 'reproduce']:
     assert getattr(mvcoba_jax, name) is not None, name
+
+
+def test_numpy_numbers_are_taken_and_a_recipes_string_refused():
+  """Counts and numbers from numpy arrays (np.int64, np.float32) are taken as Python's; bools
+  are not counts; `reproduce(recipes=...)` takes a dict of method -> preset, in one line."""
+  import numpy as np
+
+  from mvcoba_jax import arguments
+  from mvcoba_jax.reproduction import trained_for
+  assert arguments.count('c', 'n', np.int64(3), 0, 5) == 3
+  assert arguments.counts('c', 'n', np.int32(2), 0, 5) == [2]
+  assert arguments.number('c', 'n', np.float32(0.5), 0, 1) == 0.5
+  for bad in (True, np.bool_(True), 1.5):
+    with pytest.raises(arguments.ArgumentError, match='expected a whole number'):
+      arguments.count('c', 'n', bad, 0, 5)
+  with pytest.raises(arguments.ArgumentError, match="recipes='default': expected a dict"):
+    trained_for('mvcoba_jax.reproduce', 'tiny', 'default', ['mvcoba'], 8)
+  with pytest.raises(arguments.ArgumentError, match="recipes names 'mvcobaa', not a method"):
+    trained_for('mvcoba_jax.reproduce', 'tiny', {'mvcobaa': 'tiny'}, ['mvcoba'], 8)
+  chosen = trained_for('c', 'tiny', {'mvcoba': 'tiny'}, ['mvcoba'], 8)
+  assert chosen['mvcoba'].train.total_actions == 8

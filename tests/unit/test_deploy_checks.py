@@ -131,3 +131,14 @@ def test_deploy_knows_every_rule_a_method_can_have():
   from mvcoba_jax import methods
   from mvcoba_jax.deploy import model_file
   assert set(model_file.RULES) == set(methods.RULES)
+
+
+def test_the_robot_loop_refuses_a_negative_count_before_loading(capsys):
+  import importlib.util
+  spec = importlib.util.spec_from_file_location('robot_loop', SHIPPED.parent / 'examples' /
+                                                'robot_loop.py')
+  loop = importlib.util.module_from_spec(spec)
+  spec.loader.exec_module(loop)
+  with pytest.raises(SystemExit) as e:
+    loop.main(['--model', 'nowhere', '--actions', '-1'])
+  assert e.value.code == 2 and 'at least 1 action' in capsys.readouterr().err
