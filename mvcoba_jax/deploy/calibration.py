@@ -81,12 +81,13 @@ def _number(where: str, value, low: float = -math.inf, high: float = math.inf,
 
 def _matrix(where: str, value, shape) -> np.ndarray:
   try:
-    array = np.asarray(value, dtype=float)
+    array = np.asarray(value)  # as JSON gave it: strings stay strings, and are refused
   except (TypeError, ValueError):
     array = None
-  if array is None or array.shape != shape or not np.isfinite(array).all():
+  if array is None or array.dtype.kind not in 'if' or array.shape != shape or not np.isfinite(
+      array).all():
     raise DeployError(f'{where}: expected a {shape[0]}x{shape[1]} matrix of numbers')
-  return array
+  return array.astype(float)
 
 
 def _camera(where: str, data) -> Camera:

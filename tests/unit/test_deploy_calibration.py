@@ -32,6 +32,9 @@ def write(tmp_path, data, name='cal.json'):
     (lambda d: d['cameras'][0].update(camera_to_base=[[2, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0],
                                                        [0, 0, 0, 1]]), 'not a rigid transform'),
     (lambda d: d['cameras'][0].update(camera_to_base=[[1, 0], [0, 1]]), 'expected a 4x4 matrix'),
+    (lambda d: d['cameras'][0].update(camera_to_base=[[str(v) for v in r] for r in
+                                                      d['cameras'][0]['camera_to_base']]),
+     'expected a 4x4 matrix of numbers'),
     (lambda d: d['cameras'][0].update(depth_scale=0), 'cameras[0].depth_scale'),
     (lambda d: d['cameras'][0].update(width=2.5), 'cameras[0].width'),
     (lambda d: d['cameras'][0].update(lens='wide'), "unknown field 'lens'"),
