@@ -172,7 +172,7 @@ def test_an_error_about_a_huge_field_is_one_short_line(tmp_path):
   assert len(str(error.value)) <= 300 and "huge.scn:1: field 'x'" in str(error.value)
 
 
-@pytest.mark.parametrize('char', ['\r', '\x0c', '\x0b', '\u2028', '\x85'])
+@pytest.mark.parametrize('char', ['\r', '\x0c', '\x0b', '\u2028', '\x85', '\x1c', '\x1e'])
 def test_odd_line_breaks_inside_a_line_keep_the_line_numbers(tmp_path, char):
   path = tmp_path / 'odd.scn'
   path.write_bytes(f'cube red 0 0 0\ncube{char}red 0 0\n'.encode())
