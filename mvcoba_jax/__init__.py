@@ -8,12 +8,17 @@ they are imported on first use, so importing the package stays light.
 __version__ = '0.1.0'
 
 
+# The names of api.__all__ (tests/unit/test_api_arguments.py holds the two lists together): a
+# fixed list, so that `from mvcoba_jax import methods` and the like, which ask here before they
+# import the submodule, are not answered by importing the API halfway through.
+API = ('Error', 'EvalSpec', 'EvaluationError', 'Policy', 'RESULT_FILES', 'RUN_FILES',
+       'TrainError', 'TrainResult', 'check_work', 'evaluate', 'join_evaluations', 'load_policy',
+       'resumable', 'sweep', 'sweep_runs', 'train')
+
+
 def __getattr__(name: str):
-  if name.startswith('__'):  # tools probing dunders must not import JAX
-    raise AttributeError(f'module {__name__!r} has no attribute {name!r}')
-  import importlib  # noqa: PLC0415
-  api = importlib.import_module('mvcoba_jax.api')  # not `from mvcoba_jax import`: that asks here
-  if name in api.__all__:
+  if name in API:
+    from mvcoba_jax import api  # noqa: PLC0415
     return getattr(api, name)
   if name == 'reproduce':
     from mvcoba_jax.reproduction import reproduce  # noqa: PLC0415

@@ -6,6 +6,8 @@ from mvcoba_jax import methods
 from mvcoba_jax.config.schema import (ACTIVATION_LIMIT_BYTES, DENSENET_GROWTH, PHASE_LIMIT_S,
                                       REPLAY_LIMIT_BYTES, Config, ConfigError)
 
+CONTACTS_PER_OBJECT = 4  # a box resting on the table touches it at its four corners
+
 
 def validate(config: Config) -> Config:
   """Raises ConfigError when fields that are each valid do not fit together; returns `config`.
@@ -51,6 +53,14 @@ def _parts_fit(config: Config) -> None:
     if seconds > PHASE_LIMIT_S:
       raise ConfigError(f'{name} = {seconds:.3g} s of simulated motion; at most '
                         f'{PHASE_LIMIT_S:g} s per phase of a primitive or a reset')
+  if scene.backend in ('mjx', 'warp') and (
+      scene.max_contact_points < CONTACTS_PER_OBJECT * env.num_objects
+      or scene.max_geom_pairs < env.num_objects):
+    raise ConfigError(
+        f'scene.max_contact_points={scene.max_contact_points} and scene.max_geom_pairs='
+        f'{scene.max_geom_pairs} on the {scene.backend} backend: a settled drop of '
+        f'env.num_objects={env.num_objects} needs at least {CONTACTS_PER_OBJECT} contact points '
+        'and one geom pair per object on the table, or objects fall through it')
   if train.grasp_symmetry and env.num_rotations % 2:
     raise ConfigError(f'train.grasp_symmetry needs an even env.num_rotations (the grasp turned '
                       f'half way); it is {env.num_rotations}')

@@ -90,7 +90,7 @@ def test_every_name_of_the_api_is_reachable_from_the_package():
   """`mvcoba_jax.X` for every name of api.__all__ (Policy among them) and `reproduce`."""
   import mvcoba_jax
   from mvcoba_jax import api
-  assert 'Policy' in api.__all__
+  assert 'Policy' in api.__all__ and sorted(mvcoba_jax.API) == sorted(api.__all__)
   for name in [*api.__all__, 'reproduce']:
     assert getattr(mvcoba_jax, name) is not None, name
 

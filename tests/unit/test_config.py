@@ -234,3 +234,15 @@ def test_warp_without_a_cuda_device_is_refused_unless_forced(tmp_path, monkeypat
   assert not (tmp_path / 'run').exists()
   monkeypatch.setenv(physics.FORCE_WARP_CPU, '1')
   assert physics.device_problem(gpu.scene) is None
+
+
+def test_contact_caps_a_settled_drop_cannot_fit_are_refused_on_mjx_and_warp():
+  """`scene.max_contact_points=1` on Warp dropped objects through the table: refused on the two
+  backends that cap contacts; native MuJoCo has no caps, so the fields mean nothing there."""
+  for backend in ('mjx', 'warp'):
+    with pytest.raises(ConfigError, match='needs at least 4 contact points'):
+      resolve('default', [f'scene.backend={backend}', 'scene.max_contact_points=1'])
+    with pytest.raises(ConfigError, match='one geom pair per object'):
+      resolve('default', [f'scene.backend={backend}', 'scene.max_geom_pairs=5'])
+    assert resolve('default', [f'scene.backend={backend}']).scene.max_contact_points == 96
+  assert resolve('default', ['scene.backend=native', 'scene.max_contact_points=1'])
