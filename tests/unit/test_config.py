@@ -244,5 +244,5 @@ def test_contact_caps_a_settled_drop_cannot_fit_are_refused_on_mjx_and_warp():
       resolve('default', [f'scene.backend={backend}', 'scene.max_contact_points=1'])
     with pytest.raises(ConfigError, match='one geom pair per object'):
       resolve('default', [f'scene.backend={backend}', 'scene.max_geom_pairs=5'])
-    assert resolve('default', [f'scene.backend={backend}']).scene.max_contact_points == 96
+    assert resolve('default', [f'scene.backend={backend}']).scene.max_contact_points == 120
   assert resolve('default', ['scene.backend=native', 'scene.max_contact_points=1'])
