@@ -370,8 +370,10 @@ def fitting_settings(settings, by_case: dict, where: str) -> None:
     if key not in settings or settings[key] is None:
       raise ResultsError(f'{where}.settings.{key}: missing; the row cannot be checked (evaluate '
                          'it again)')
-  for key in ('runs', 'max_actions', 'seed', 'step'):
-    value = settings.get(key, 0)
+  for key in ('runs', 'max_actions', 'seed', 'step'):  # a baseline row has no step (None)
+    value = settings.get(key)
+    if value is None and key not in ('runs', 'max_actions'):
+      continue
     if isinstance(value, bool) or not isinstance(value, int) or value < 0:
       raise ResultsError(f'{where}.settings.{key}: expected a count, got {str(value)[:40]!r}')
   cases, runs, cap = settings['cases'], settings['runs'], settings['max_actions']
