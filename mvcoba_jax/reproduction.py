@@ -92,6 +92,10 @@ def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
     planned = sweep_runs(recipes[method], workdir, [method], seeds)
     dirs += api.sweep(recipes[method], workdir, methods=[method], seeds=seeds,
                       resume=any(started(r, c) for r, c in planned.items()), progress=progress)
+  missing = [str(d / 'metrics.jsonl') for d in dirs if not (d / 'metrics.jsonl').is_file()]
+  if missing:  # the comparison's timing reads them: refused before the evaluation, not after
+    raise api.TrainError(f'{missing[0]} is missing (a run without its log); train that run '
+                         'again with --overwrite')
   plot_sweep(dirs, config.train.curve_window, workdir)
   reports, eval_s = {}, 0.0
   for protocol in protocols:

@@ -55,6 +55,8 @@ def heightmaps(depths, calibration: Calibration, colors=None):
   (RGB, uint8 or 0..1; none: colour 0)."""
   if len(depths) != len(calibration.cameras):
     raise DeployError(f'{len(depths)} depth images for {len(calibration.cameras)} cameras')
+  if colors is not None and len(colors) != len(depths):
+    raise DeployError(f'{len(colors)} colour images for {len(depths)} depth images')
   r, half, res = calibration.grid, calibration.half, calibration.resolution
   out_color = np.zeros((len(depths), r, r, 3), np.float32)
   out_depth = np.zeros((len(depths), r, r), np.float32)

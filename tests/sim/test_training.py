@@ -358,6 +358,13 @@ def test_reproduction_trains_evaluates_and_sets_ours_beside_the_paper(tmp_path, 
                              '--out', str(out), '--protocols', 'frozen']) == 0
   assert capsys.readouterr().out.count('finished already') == 1
   assert '| MV-COBA (mvcoba) | 1 |' in (out / 'comparison.md').read_text()
+  # A finished run that lost its log is refused before anything is evaluated, in one line.
+  (tmp_path / 'sweep' / 'grasp_only-s0' / 'metrics.jsonl').unlink()
+  assert reproduce_cli.main(['--config', TINY, '--methods', 'grasp_only', '--seeds', '0',
+                             '--actions', '4', '--runs', '1', '--max-actions', '2',
+                             '--suites', 'occluded', '--workdir', str(tmp_path / 'sweep'),
+                             '--out', str(out), '--protocols', 'frozen']) == 2
+  assert 'grasp_only-s0/metrics.jsonl is missing' in capsys.readouterr().err
 
 
 AUTHORS_RECIPE = ['train.failed_grasp_reward=0', 'train.no_change_push_reward=-1',

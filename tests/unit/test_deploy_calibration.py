@@ -71,6 +71,8 @@ def test_wrong_image_sizes_and_empty_depth_are_refused(tmp_path):
     heightmaps([np.zeros((48, 64))], cal)
   with pytest.raises(DeployError, match='2 depth images for 1 cameras'):
     heightmaps([np.ones((48, 64))] * 2, cal)
+  with pytest.raises(DeployError, match='3 colour images for 1 depth images'):
+    heightmaps([np.ones((48, 64))], cal, [np.zeros((48, 64, 3), np.uint8)] * 3)
   _, depth, seen = heightmaps([np.full((48, 64), 0.58)], cal)  # a flat table 2 cm below: height 0
   assert seen.any() and np.abs(depth[seen]).max() == 0.0
 
