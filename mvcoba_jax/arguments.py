@@ -77,9 +77,9 @@ def flag(call: str, name: str, value) -> bool:
 
 
 def _whole(value) -> bool:
-  """A whole number of Python or numpy (np.int64 from an array), not a bool."""
-  return isinstance(value, numbers.Integral) and not isinstance(value, bool) and type(
-      value).__name__ != 'bool_'
+  """A whole number of Python or numpy (np.int64 from an array), not a bool (numpy's bool is no
+  `numbers.Integral`)."""
+  return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 
 def count(call: str, name: str, value, low: int, high: int) -> int:
@@ -101,7 +101,7 @@ def counts(call: str, name: str, value, low: int, high: int) -> list[int]:
 
 
 def number(call: str, name: str, value, low: float, high: float) -> float:
-  if (isinstance(value, numbers.Real) and not isinstance(value, bool)
-      and type(value).__name__ != 'bool_' and math.isfinite(value) and low <= value <= high):
+  if (isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
+      and low <= value <= high):
     return float(value)
   raise ArgumentError(f'{call}: {name}={_show(value)}: expected a number in [{low:g}, {high:g}]')

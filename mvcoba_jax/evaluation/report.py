@@ -372,9 +372,7 @@ def fitting_settings(settings, by_case: dict, where: str) -> None:
                          'it again)')
   for key in ('runs', 'max_actions', 'seed', 'step'):  # a baseline row has no step (None)
     value = settings.get(key)
-    if value is None and key not in ('runs', 'max_actions'):
-      continue
-    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+    if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 0):
       raise ResultsError(f'{where}.settings.{key}: expected a count, got {str(value)[:40]!r}')
   cases, runs, cap = settings['cases'], settings['runs'], settings['max_actions']
   listed = settings.get('listed_objects')
