@@ -16,7 +16,7 @@ VALIDATION = ROOT / 'docs' / 'results' / 'validation'
 PAPER_TEXT = ['--config', 'paper_text']
 NOFRESH = ['--config', 'authors', '--set', 'train.fresh_in_batch=false']
 OCCLUDED = NOFRESH + ['--set', 'env.occluded_share=0.25']  # the default preset at 3000 actions
-SCREEN_BASE = ['--config', 'default', '--set', 'train.total_actions=3000']  # preset_default
+SCREEN_BASE = ['--config', 'reproduction', '--set', 'train.total_actions=3000']  # preset_default
 VARIANTS = {
     'paper_text': PAPER_TEXT,
     'targets': PAPER_TEXT + ['--set', 'train.bootstrap_no_change=false',
@@ -45,15 +45,15 @@ VARIANTS = {
     # The presets of the day at the reproduction's 3000 actions, for each method's best recipe.
     'preset_paper_text': ['--config', 'paper_text'],
     'preset_authors': ['--config', 'authors'],
-    'preset_default': ['--config', 'default', '--set', 'train.total_actions=3000'],
+    'preset_default': ['--config', 'reproduction', '--set', 'train.total_actions=3000'],
     # The reproduction's preset_default (3000 actions, 8 tabletops, one update per lockstep
     # action) at more tabletops in lockstep, with and without the replay ratio kept
     # (`train.replay_ratio=1`: 8 sampled per 8 new transitions, as preset_default's B=8).
-    'batch_32_ratio': ['--config', 'default', '--set', 'train.total_actions=3000',
+    'batch_32_ratio': ['--config', 'reproduction', '--set', 'train.total_actions=3000',
                        '--set', 'num_envs=32', '--set', 'train.replay_ratio=1'],
-    'batch_64_ratio': ['--config', 'default', '--set', 'train.total_actions=3000',
+    'batch_64_ratio': ['--config', 'reproduction', '--set', 'train.total_actions=3000',
                        '--set', 'num_envs=64', '--set', 'train.replay_ratio=1'],
-    'batch_64': ['--config', 'default', '--set', 'train.total_actions=3000',
+    'batch_64': ['--config', 'reproduction', '--set', 'train.total_actions=3000',
                  '--set', 'num_envs=64'],
     # Issue 65's candidates, each from preset_default: CPG's suppression in MV-COBA's change
     # rule, a push after a failed grasp, unseen cells filled from the other view, and all three.

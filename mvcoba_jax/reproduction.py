@@ -36,8 +36,8 @@ PROTOCOLS = tuple(p.name for p in protocols_lib.PAPER)  # names: the command lin
 # method -> the preset it trains with in the reproduction: the one it validated best with in the
 # per-method screen (docs/results/recipe/baselines/choice.md, by the rule in
 # experiments/recipe_table.py; tests/unit/test_recipe_table.py holds the two together).
-RECIPES = {'mvcoba': 'default', 'mvcoba_2fcn': 'authors', 'vpg': 'authors', 'grasp_only': 'default',
-           'mvp': 'default', 'cpg': 'default'}
+RECIPES = {'mvcoba': 'reproduction', 'mvcoba_2fcn': 'authors', 'vpg': 'authors',
+           'grasp_only': 'reproduction', 'mvp': 'reproduction', 'cpg': 'reproduction'}
 
 
 def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),

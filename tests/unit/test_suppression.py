@@ -86,7 +86,7 @@ def test_mvcoba_with_suppression_grasps_and_pushes_only_where_allowed():
     picked = f[np.arange(2), primitive, np.asarray(action.rotation), np.asarray(action.row),
                np.asarray(action.col)]
     assert (picked > 0).all(), picked
-  assert agent.rule_maps(q, depth, method, resolve('default')) is q
+  assert agent.rule_maps(q, depth, method, resolve('reproduction')) is q
 
 
 def test_a_given_primitive_with_nothing_allowed_keeps_its_raw_map():
