@@ -7,9 +7,9 @@ DIR is the output of `mvcoba-export`. state.npz holds `color` (V, R, R, 3) RGB i
 says whether the previous action changed the scene (1 before the first action), which the
 change-observation rule of MV-COBA needs. Prints the action as one line of JSON.
 
-Only the action rule (`mvcoba_jax.deploy`'s, numpy alone) and pixel -> world run here; the ONNX
-graph does the rest, rotations included (model.json, 'onnx'). For depth images of calibrated
-cameras and an action in a robot's frame, see `mvcoba_jax.deploy` and examples/robot_loop.py.
+The ONNX graph decides (network, rotations, the method's action rule and argmax: model.json,
+'onnx'); only pixel -> world runs here. For depth images of calibrated cameras, the checks before
+a robot acts and an action in its frame, see `mvcoba_jax.deploy` and examples/robot_loop.py.
 """
 from __future__ import annotations
 
@@ -21,14 +21,17 @@ import sys
 import numpy as np
 import onnxruntime as ort
 
-from mvcoba_jax.deploy import policy as deploy_policy
+from mvcoba_jax.deploy import DeployError, model_file
 
 
-def choose(q: np.ndarray, changed: bool, model: dict) -> dict:
-  """The greedy action of `model['action_rule']` from its maps (2, K, R, R)
-  (`mvcoba_jax.deploy.policy.choose`, which needs no JAX)."""
-  primitive, rotation, row, col, value = deploy_policy.choose(q, changed, model)
-  return {'primitive': primitive, 'rotation': rotation, 'row': row, 'col': col, 'value': value}
+def choose(session: ort.InferenceSession, color: np.ndarray, depth: np.ndarray,
+           changed: bool) -> dict:
+  """The graph's greedy action on one state: its `action` and `value` outputs."""
+  action, value = session.run(['action', 'value'], {
+      'color': color[None], 'depth': depth[None], 'changed': np.array([changed])})
+  primitive, rotation, row, col = (int(i) for i in action[0])
+  return {'primitive': primitive, 'rotation': rotation, 'row': row, 'col': col,
+          'value': float(value[0])}
 
 
 def to_world(action: dict, depth: np.ndarray, model: dict) -> dict:
@@ -62,17 +65,19 @@ def main(argv=None) -> int:
                       help='whether the previous action changed the scene (default 1)')
   args = parser.parse_args(argv)
   try:
-    model = json.loads((args.model / 'model.json').read_text())
+    spec = model_file.read(args.model)  # checked: format, grid, views, rotations
+    if not spec.graph_decides:
+      raise DeployError(f'{args.model}: an export whose graph leaves the rule out; export again')
+    model = spec.raw
     color, depth = load_state(args.state, model)
-  except (OSError, KeyError, ValueError) as e:
+  except (OSError, KeyError, ValueError, DeployError) as e:
     print(f'error: {e}', file=sys.stderr)
     return 2
   options = ort.SessionOptions()
   options.log_severity_level = 3  # the converter's loose shape annotations only warn
   session = ort.InferenceSession(str(args.model / model['onnx']['file']), options,
                                  providers=['CPUExecutionProvider'])
-  (q,) = session.run([model['action_rule']['maps']], {'color': color[None], 'depth': depth[None]})
-  action = to_world(choose(q[0], bool(args.changed), model), depth, model)
+  action = to_world(choose(session, color, depth, bool(args.changed)), depth, model)
   print(json.dumps(action))
   return 0
 

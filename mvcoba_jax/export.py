@@ -4,10 +4,13 @@
 directory (config.json, checkpoints/) and writes the following to DIR; `policy.load` reads it back
 (`mvcoba-eval --checkpoint DIR`), so a trained policy travels without its training state:
 - params.npz: the network parameters by flat name (`fcns/0/trunk/blocks/0/conv1/kernel`);
-- model.onnx: the Q-network forward for one state and all K rotations, rotations included;
+- model.onnx: the whole decision on one state: the Q-network forward for all K rotations,
+  rotations included, and the method's action rule and argmax (`agent.decide`), given whether
+  the last action changed the scene;
 - model.json: names, shapes and dtypes of the parameters, the config, the heightmap frame, the
-  rotations, the input normalisation, the method's action rule and what the ONNX graph leaves
-  to the caller (the action rule and pixel -> world), all that `examples/onnx_infer.py` needs;
+  rotations, the input normalisation, the method's action rule in words and what the ONNX graph
+  leaves to the caller (pixel -> world, the change observation), all that
+  `examples/onnx_infer.py` needs;
   with `results`, the figures that evaluations measured for these parameters, so a shipped
   policy says what it scores and `mvcoba-eval` can check it.
 """
@@ -37,7 +40,9 @@ ONNX_OPSET = 23
 
 
 def onnx_model(config: Config, model: networks.QNetwork):
-  """ModelProto of (color (1, V, R, R, 3), depth (1, V, R, R)) -> q (1, 2, K, R, R)."""
+  """ModelProto of (color (1, V, R, R, 3), depth (1, V, R, R), changed (1,) bool) -> q
+  (1, 2, K, R, R), the rule's scores where it suppresses, action (1, 4) int32 (primitive,
+  rotation, row, col) and value (1,): `agent.decide`, traced, so a runtime applies no rule."""
   # jax2onnx's plugins for dm_pix, which the network does not use, fail to import under this
   # JAX and log a traceback each; they are skipped either way.
   logging.getLogger('jax2onnx.plugins.plugin_system').setLevel(logging.ERROR)
@@ -51,32 +56,42 @@ def onnx_model(config: Config, model: networks.QNetwork):
   graphdef, params = nnx.split(model)
   side, views = perception.grid_size(config), len(config.scene.cameras)
   method = model.method
-  outputs = output_names(agent.suppresses(method, config))
+  suppress = agent.suppresses(method, config)
 
-  def forward(color, depth):
+  def forward(color, depth, changed):
     q = nnx.merge(graphdef, params)(color, depth)
-    if len(outputs) == 1:
-      return q
-    return q, agent.rule_maps(q, depth, method, config)
+    action, value = agent.decide(q, depth, changed, method, config)
+    chosen = jnp.stack([action.primitive, action.rotation, action.row, action.col], axis=-1)
+    scores = (agent.rule_maps(q, depth, method, config),) if suppress else ()
+    return (q, *scores, chosen, value)
 
-  return to_onnx(forward, [jax.ShapeDtypeStruct((1, views, side, side, 3), jnp.float32),
-                           jax.ShapeDtypeStruct((1, views, side, side), jnp.float32)],
-                 model_name=f'mvcoba_{method.name}_q', opset=ONNX_OPSET,
-                 input_names=['color', 'depth'], output_names=list(outputs))
+  try:
+    return to_onnx(forward, [jax.ShapeDtypeStruct((1, views, side, side, 3), jnp.float32),
+                             jax.ShapeDtypeStruct((1, views, side, side), jnp.float32),
+                             jax.ShapeDtypeStruct((1,), jnp.bool_)],
+                   model_name=f'mvcoba_{method.name}_q', opset=ONNX_OPSET,
+                   input_names=['color', 'depth', 'changed'],
+                   output_names=list(output_names(suppress)))
+  except Exception as e:  # noqa: BLE001 (the converter raises any kind on what it cannot trace)
+    raise PolicyError(f'method {method.name}: its decision does not convert to ONNX '
+                      f'({type(e).__name__}: {str(e)[:160]}); a Rule\'s pick must avoid '
+                      'what jax2onnx cannot trace (methods.Rule)') from None
 
 
 def output_names(suppress: bool) -> tuple[str, ...]:
-  """The graph's outputs: Q maps, and where the rule suppresses the scores it compares."""
-  return ('q', 'score') if suppress else ('q',)
+  """The graph's outputs: Q maps, where the rule suppresses the scores it compares, the action
+  and its value."""
+  return ('q', 'score', 'action', 'value') if suppress else ('q', 'action', 'value')
 
 
 def action_rule(method: methods.Method, suppress: bool = False) -> dict:
-  """The method's `Rule`, in words and by the name a runtime outside JAX applies it by; its
-  maps are the scores where it suppresses (`agent.suppresses`)."""
-  maps = output_names(suppress or method.suppress)[-1]
+  """The method's `Rule` in words, applied inside the graph; its maps are the scores where it
+  suppresses (`agent.suppresses`)."""
+  maps = 'score' if suppress or method.suppress else 'q'
   return {'name': method.rule.name, 'maps': maps, 'primitive': method.rule.text,
           'pixel': (f'argmax of that primitive\'s {maps} over (rotation, row, col), flattened in '
                     'that order; the first maximum wins'),
+          'where': 'inside the ONNX graph (its action output); changed is its input',
           'greedy': 'exploration (epsilon-greedy) is a training matter and is not exported'}
 
 
@@ -127,7 +142,10 @@ def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir,
                           'views_used are ignored'},
               {'name': 'depth', 'shape': [1, num_views, side, side], 'dtype': 'float32',
                'meaning': 'height above the table in metres, [0, view, row, col]; '
-                          '0 where the view saw nothing'}],
+                          '0 where the view saw nothing'},
+              {'name': 'changed', 'shape': [1], 'dtype': 'bool',
+               'meaning': 'whether the last action changed the scene (true before the first '
+                          'action): the change observation, outside the graph'}],
           'outputs': [
               {'name': 'q', 'shape': [1, 2, k, side, side], 'dtype': 'float32',
                'meaning': 'Q[0, primitive, rotation, row, col] in the heightmap frame (already '
@@ -136,14 +154,22 @@ def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir,
               {'name': 'score', 'shape': [1, 2, k, side, side], 'dtype': 'float32',
                'meaning': 'what the action rule compares: (Q + 0.1) x the suppression factor '
                           'of each action (CPG), no_action where suppressed; Q where nothing '
-                          'is allowed'}] if suppress else []),
+                          'is allowed'}] if suppress else []) + [
+              {'name': 'action', 'shape': [1, 4], 'dtype': 'int32',
+               'meaning': '[primitive, rotation, row, col] of the greedy action (action_rule)'},
+              {'name': 'value', 'shape': [1], 'dtype': 'float32',
+               'meaning': f'the {action_rule(method, suppress)["maps"]} of that action'}],
           'in_graph': ['views_used selection'] + (
               ['fusion of the views into one, the highest point per cell'] if method.fuse else []) + [
                   'rotation of the inputs by -angle(k) for each k (bilinear, zero fill)',
                   'input normalisation', 'the FCNs', 'rotation of the Q maps back by +angle(k)'
-              ] + (['suppression of actions that cannot act (score)'] if suppress else []),
-          'outside_graph': ['the action rule and the argmax (action_rule)',
-                            'pixel -> world (pixel_to_world)']},
+              ] + (['suppression of actions that cannot act (score)'] if suppress else []) + [
+                  'the action rule and the argmax (action_rule)'],
+          'outside_graph': ['pixel -> world (pixel_to_world)',
+                            'the change observation between two frames (config.perception)'
+                            ] + (['filling each view\'s unseen cells from the others '
+                                  '(config.perception.fill_unseen)']
+                                 if config.perception.fill_unseen else [])},
   }
 
 

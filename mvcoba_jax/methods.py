@@ -18,10 +18,13 @@ from mvcoba_jax.sim.primitives import GRASP, PUSH
 @dataclasses.dataclass(frozen=True)
 class Rule:
   """How a method picks its primitive, and what follows from it: its Q-learning target's max and
-  its exploration. `name` is how model.json tells a runtime outside JAX which rule to apply."""
+  its exploration. `name` and `text` describe it in model.json; the export traces `pick` into
+  the ONNX graph."""
   name: str
   text: str  # the rule in words (model.json)
   pick: Callable  # (changed (B,) bool, best (B, 2) each primitive's max) -> (B,) int32 primitive
+  # `pick` is traced into the export's graph: jax2onnx cannot trace jnp's jitted helpers
+  # take_along_axis, unravel_index and integer `//` (use lax.div), and the export says so.
   future_over_both: bool  # the target's max is over both primitives' maps, else the one at s'
   explores_primitive: bool  # a random action draws its primitive too, else keeps the rule's
   compares_primitives: bool  # `pick` reads the maps' maxima, else the primitive is given

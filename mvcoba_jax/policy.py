@@ -86,16 +86,15 @@ class Policy(typing.NamedTuple):
     except checks.Refused as e:
       raise PolicyError(f'observation refused: {e}') from None
     depth = jnp.asarray(depth)[None]
-    maps = agent.rule_maps(jnp.asarray(self.q_maps(color, depth[0]))[None], depth, method,
-                           config)
-    pick = agent.greedy_actions(maps, jnp.asarray([bool(changed)]), method)
+    pick, score = agent.decide(jnp.asarray(self.q_maps(color, depth[0]))[None], depth,
+                               jnp.asarray([bool(changed)]), method, config)
     world = agent.to_world(pick, depth, method.views, config)
     k = int(pick.rotation[0])
     decision = Decision(primitive=('push', 'grasp')[int(pick.primitive[0])], rotation=k,
                         angle=float(rotation_angle(k, config.env.num_rotations)),
                         row=int(pick.row[0]), col=int(pick.col[0]), x=float(world.x[0]),
                         y=float(world.y[0]), z=float(world.z[0]),
-                        q=float(maps[0, pick.primitive[0], k, pick.row[0], pick.col[0]]))
+                        q=float(score[0]))
     try:
       checks.action(decision.q, decision.angle, (decision.x, decision.y, decision.z), half, top)
     except checks.Refused as e:

@@ -13,17 +13,17 @@ import pathlib
 
 from mvcoba_jax.deploy.calibration import DeployError
 
-FORMAT = 'mvcoba-jax-export/1'
-RULES = ('change', 'max_q', 'grasp')  # `methods.RULES` by name: the rules a runtime applies
-MAPS = ('q', 'score')  # the graph's outputs an action rule may compare
+FORMAT = 'mvcoba-jax-export/2'  # what export writes: the graph outputs the action
+# Format 1's graph stopped at the maps and left the rule to the runtime: its parameters still
+# load (`policy.load`), its graph is refused by `deploy.OnnxPolicy`.
+FORMATS = (FORMAT, 'mvcoba-jax-export/1')
 
 
 @dataclasses.dataclass(frozen=True)
 class ModelFile:
   """What acting on an export needs from its model.json, checked."""
   raw: dict  # the whole file, for what no action depends on (figures, source, names)
-  rule: str
-  maps: str
+  graph_decides: bool  # the ONNX graph outputs the action (format 2)
   push: int
   grasp: int
   angles_rad: tuple[float, ...]
@@ -42,8 +42,8 @@ class ModelFile:
 
 def read(folder) -> ModelFile:
   """The checked model.json of an export folder; DeployError naming the file, the field and the
-  problem, for the first field that is missing, mistyped or out of range, an unknown format or
-  rule, or an ONNX file outside the folder."""
+  problem, for the first field that is missing, mistyped or out of range, an unknown format,
+  or an ONNX file outside the folder."""
   folder = pathlib.Path(folder)
   path = folder / 'model.json'
   try:
@@ -52,14 +52,9 @@ def read(folder) -> ModelFile:
     raise DeployError(f'{path}: not an export ({type(e).__name__}: {str(e)[:120]})') from None
   field = _Fields(raw, path)
   fmt = field.get('format', str)
-  if fmt != FORMAT:
-    raise DeployError(f'{path}: format {fmt!r}: this runtime reads {FORMAT!r} (another version '
-                      'of mvcoba_jax wrote it)')
-  rule = field.get('action_rule.name', str)
-  if rule not in RULES:
-    raise DeployError(f'{path}: action_rule.name {rule!r} is unknown here (known: '
-                      f'{", ".join(RULES)}); a newer mvcoba_jax may apply it')
-  maps = field.get('action_rule.maps', str, allowed=MAPS)
+  if fmt not in FORMATS:
+    raise DeployError(f'{path}: format {fmt!r}: this runtime reads {", ".join(FORMATS)} '
+                      '(another version of mvcoba_jax wrote it)')
   push = field.get('primitives.push', int, (0, 1))
   grasp = field.get('primitives.grasp', int, (0, 1))
   if push == grasp:
@@ -96,7 +91,7 @@ def read(folder) -> ModelFile:
     if type(value) is not bool:
       raise DeployError(f'{path}: config.perception.{name} {str(value)[:40]!r}: true or false '
                         'expected')
-  return ModelFile(raw=raw, rule=rule, maps=maps, push=push, grasp=grasp, **flags,
+  return ModelFile(raw=raw, graph_decides=fmt == FORMAT, push=push, grasp=grasp, **flags,
                    angles_rad=tuple(float(a) for a in angles), resolution_m=res, grid_size=side,
                    workspace_half_m=half, num_views=views, views_used=tuple(used),
                    onnx_file=onnx_file, **change)
@@ -108,7 +103,7 @@ class _Fields:
   def __init__(self, raw, path: pathlib.Path):
     self.raw, self.path = raw, path
 
-  def get(self, dotted: str, kind: type, bounds: tuple | None = None, allowed: tuple = ()):
+  def get(self, dotted: str, kind: type, bounds: tuple | None = None):
     value = self.raw
     for key in dotted.split('.'):
       if not isinstance(value, dict) or key not in value:
@@ -120,8 +115,6 @@ class _Fields:
       raise DeployError(f'{self.path}: {dotted} {str(value)[:40]!r}: a {kind.__name__} expected')
     if bounds and not bounds[0] <= value <= bounds[1]:
       raise DeployError(f'{self.path}: {dotted} {value!r} outside {bounds[0]:g}..{bounds[1]:g}')
-    if allowed and value not in allowed:
-      raise DeployError(f'{self.path}: {dotted} {value!r}: one of {", ".join(allowed)}')
     return value
 
 

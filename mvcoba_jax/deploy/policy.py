@@ -1,6 +1,6 @@
-"""An exported policy (`mvcoba-export`'s folder) acting on heightmaps with onnxruntime, its action
-checked before a robot may take it, and the change observation between two frames; numpy and
-onnxruntime only."""
+"""An exported policy (`mvcoba-export`'s folder) acting on heightmaps with onnxruntime (the graph
+decides: network, rule and argmax), its input and action checked before a robot may take it, and
+the change observation between two frames; numpy and onnxruntime only."""
 from __future__ import annotations
 
 import dataclasses
@@ -12,7 +12,6 @@ import numpy as np
 from mvcoba_jax.deploy import checks, model_file
 from mvcoba_jax.deploy.calibration import Calibration, DeployError
 from mvcoba_jax.deploy.heightmaps import filled
-from mvcoba_jax.deploy.model_file import RULES
 
 
 @dataclasses.dataclass(frozen=True)
@@ -27,34 +26,18 @@ class Action:
   q: float
 
 
-def choose(q: np.ndarray, changed: bool, model: dict) -> tuple[int, int, int, int, float]:
-  """(primitive, rotation, row, col, score): the greedy action of `model['action_rule']`
-  (model.json) from its maps (2, K, R, R), the graph's output named by action_rule['maps'] (Q
-  maps, or a suppressing method's scores); `changed`: whether the last action changed the
-  scene."""
-  flat = q.reshape(q.shape[0], -1)
-  prims, rule = model['primitives'], model['action_rule']['name']
-  if rule == 'change':
-    primitive = prims['grasp'] if changed else prims['push']
-  elif rule == 'max_q':
-    primitive = int(np.argmax(flat.max(axis=1)))  # first maximum: push on a tie
-  elif rule == 'grasp':
-    primitive = prims['grasp']
-  else:
-    raise DeployError(f'action rule {rule!r} is unknown here (known: {", ".join(RULES)})')
-  index = int(np.argmax(flat[primitive]))
-  rotation, row, col = (int(i) for i in np.unravel_index(index, q.shape[1:]))
-  return primitive, rotation, row, col, float(flat[primitive, index])
-
-
 class OnnxPolicy:
-  """model.json and model.onnx of an export: the network's maps of a state and its method's
-  greedy rule (model.json's `action_rule`), as `examples/onnx_infer.py` applies them."""
+  """model.json and model.onnx of an export: the graph's greedy action on a state, given whether
+  the last action changed the scene, as `examples/onnx_infer.py` runs it."""
 
   def __init__(self, folder):
     import onnxruntime as ort  # noqa: PLC0415 (only a policy needs it, not the heightmaps)
     self.folder = folder = pathlib.Path(folder)
     self.spec = model_file.read(folder)  # refuses a damaged, unknown or hand-broken model.json
+    if not self.spec.graph_decides:
+      raise DeployError(f'{folder / "model.json"}: format {self.spec.raw["format"]!r}: its graph '
+                        'leaves the action rule to the runtime; export it again '
+                        f'(mvcoba-export --checkpoint {folder} --out NEW_FOLDER)')
     self.model = self.spec.raw
     onnx_file = self.spec.onnx_file
     options = ort.SessionOptions()
@@ -78,11 +61,20 @@ class OnnxPolicy:
                         f'{spec.num_views} views')
 
   def choose(self, color, depth, changed: bool) -> tuple[int, int, int, int, float]:
-    """(primitive, rotation, row, col, score) of the greedy action on heightmaps of every view."""
-    (maps,) = self.session.run([self.spec.maps],
-                               {'color': np.asarray(color, np.float32)[None],
-                                'depth': np.asarray(depth, np.float32)[None]})
-    return choose(maps[0], changed, self.model)
+    """(primitive, rotation, row, col, score) of the graph's greedy action on heightmaps of every
+    view."""
+    action, value = self.session.run(['action', 'value'],
+                                     {'color': np.asarray(color, np.float32)[None],
+                                      'depth': np.asarray(depth, np.float32)[None],
+                                      'changed': np.array([bool(changed)])})
+    primitive, rotation, row, col = (int(i) for i in action[0])
+    spec = self.spec
+    if (primitive not in (spec.push, spec.grasp) or not 0 <= rotation < len(spec.angles_rad)
+        or not (0 <= row < spec.grid_size and 0 <= col < spec.grid_size)):
+      raise DeployError(f'refused: the graph chose primitive {primitive}, rotation {rotation}, '
+                        f'cell ({row}, {col}): outside the policy\'s {len(spec.angles_rad)} '
+                        f'rotations and {spec.grid_size} x {spec.grid_size} grid')
+    return primitive, rotation, row, col, float(value[0])
 
   def act(self, color, depth, seen, changed: bool, calibration: Calibration) -> Action:
     """The greedy action in the robot's base frame, refused (DeployError, with the reason) from

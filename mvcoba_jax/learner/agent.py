@@ -45,14 +45,32 @@ def rule_maps(q, depth, method: Method, config: Config):
 def greedy_actions(q, changed, method: Method) -> PixelAction:
   """The rule's primitive at the argmax rotation and pixel of its maps (B, 2, K, R, R): Q maps,
   or `rule_maps` of them. `changed` is whether the previous action changed the scene (True
-  before the first action)."""
-  b, _, k, r, _ = q.shape
-  flat = q.reshape(b, 2, k * r * r)
+  before the first action). The first maximum wins, in (rotation, row, col) order.
+
+  Written without jnp's take_along_axis, unravel_index and integer `//`, which jax2onnx cannot
+  trace, so that the export traces it into the ONNX graph (`export.onnx_model`)."""
+  return _greedy(q, changed, method)[0]
+
+
+def decide(q, depth, changed, method: Method, config: Config):
+  """(action, score): the greedy action on Q maps `q` (B, 2, K, R, R) of states whose heightmaps
+  are `depth` (B, V, R, R), and the value its rule compared there (`rule_maps`). What a policy
+  and the exported graph decide, the same function in both."""
+  return _greedy(rule_maps(q, depth, method, config), changed, method)
+
+
+def _greedy(maps, changed, method: Method):
+  b, _, k, r, _ = maps.shape
+  flat = maps.reshape(b, 2, k * r * r)
   primitive = method.rule.pick(changed, flat.max(axis=-1))
-  chosen = jnp.take_along_axis(flat, primitive[:, None, None], axis=1)[:, 0]
-  rotation, row, col = jnp.unravel_index(jnp.argmax(chosen, axis=-1), (k, r, r))
-  return PixelAction(primitive=primitive, rotation=rotation.astype(jnp.int32),
-                     row=row.astype(jnp.int32), col=col.astype(jnp.int32))
+  chosen = jnp.where((primitive == GRASP)[:, None], flat[:, GRASP], flat[:, PUSH])
+  index = jnp.argmax(chosen, axis=-1).astype(jnp.int32)
+  rotation, pixel = jax.lax.div(index, r * r), jax.lax.rem(index, r * r)
+  action = PixelAction(primitive=primitive, rotation=rotation, row=jax.lax.div(pixel, r),
+                       col=jax.lax.rem(pixel, r))
+  # The map's entry at the argmax, not its max: a NaN there must reach the caller's checks.
+  at = jnp.arange(k * r * r)[None] == index[:, None]
+  return action, jnp.where(at, chosen, 0.0).sum(axis=-1)
 
 
 def epsilon_greedy(q, changed, occupied, epsilon, key, method: Method):

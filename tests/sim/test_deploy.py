@@ -29,7 +29,7 @@ pytestmark = pytest.mark.filterwarnings('ignore::DeprecationWarning:jax2onnx')
 @pytest.fixture(scope='module')
 def scenes():
   """(env, 16 settled drops with occluders on a third, their camera images, their heightmaps)."""
-  env = make_env('default', 'native', 'env.occluded_share=0.3')
+  env = make_env('reproduction', 'native', 'env.occluded_share=0.3')
   states = jax.jit(jax.vmap(env.reset))(jax.random.split(jax.random.PRNGKey(4), 16))
   images = jax.jit(jax.vmap(lambda s: cameras.render(env, s)))(states)
   observed = jax.jit(lambda s: task.observe(env, s))(states)

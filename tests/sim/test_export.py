@@ -17,14 +17,13 @@ import pytest
 from flax import nnx
 
 import mvcoba_jax
-from mvcoba_jax import export, methods, perception, policy
+from mvcoba_jax import export, perception, policy
 from mvcoba_jax.cli import export as export_cli
 from mvcoba_jax.cli import viz as viz_cli
 from mvcoba_jax.config import ConfigError, defaulted, from_dict, resolve, to_dict
 from mvcoba_jax.learner import agent
 from mvcoba_jax.learner.checkpoint import Checkpoints
 from mvcoba_jax.learner.training import Trainer
-from mvcoba_jax.methods import names as method_names
 from tests.helpers import layout, stack
 
 ort = pytest.importorskip('onnxruntime')
@@ -115,9 +114,16 @@ def parity(run, exported, states):
   trainer, _, params = run
   forward = jax.jit(lambda c, d: nnx.merge(trainer.graphdef, params)(c, d))
   session = exported[2]
-  return {name: (np.asarray(forward(c, d)),
-                 session.run(['q'], {'color': np.asarray(c), 'depth': np.asarray(d)})[0])
+  return {name: (np.asarray(forward(c, d)), onnx_outputs(session, c, d, True)['q'])
           for name, (c, d) in states.items()}
+
+
+def onnx_outputs(session, color, depth, changed: bool) -> dict:
+  """Every output of an exported graph on one state, by name."""
+  names = [o.name for o in session.get_outputs()]
+  return dict(zip(names, session.run(names, {'color': np.asarray(color),
+                                             'depth': np.asarray(depth),
+                                             'changed': np.array([changed])})))
 
 
 def jax_action(q, changed, depth, trainer):
@@ -151,31 +157,19 @@ def test_model_json_describes_frame_rotations_and_rule(exported):
 
 
 @pytest.mark.parametrize('name', ['random', 'rendered'])
-def test_onnx_matches_jax_forward_and_action(name, run, parity, states):
+def test_onnx_matches_jax_forward_and_action(name, run, exported, parity, states):
+  """The graph's Q maps match JAX's, and its action (the rule and argmax, inside the graph) is
+  the one the training step's greedy rule picks, after a change and after none."""
   q_jax, q_onnx = parity[name]
   assert q_onnx.shape == q_jax.shape
   diff = float(np.abs(q_onnx - q_jax).max())
   assert diff < TOLERANCE, f'{name}: max |ONNX - JAX| = {diff:.2e}'
-  example = _example()
-  model = {'primitives': {'push': 0, 'grasp': 1}, 'action_rule': export.action_rule(methods.get('mvcoba'))}
   for changed in (False, True):
     want = jax_action(q_jax, changed, states[name][1], run[0])
-    got = example.choose(q_onnx[0], changed, model)
-    assert {k: got[k] for k in ('primitive', 'rotation', 'row', 'col')} == {
-        k: want[k] for k in ('primitive', 'rotation', 'row', 'col')}
-
-
-@pytest.mark.parametrize('method', method_names())
-def test_example_rule_is_the_agents_rule(method):
-  """Every method's rule as the example applies it from model.json, on the same Q maps."""
-  q = np.asarray(jax.random.normal(jax.random.PRNGKey(method_names().index(method)), (1, 2, 4, 8, 8)))
-  example = _example()
-  model = {'primitives': {'push': 0, 'grasp': 1}, 'action_rule': export.action_rule(methods.get(method))}
-  for changed in (False, True):
-    action = agent.greedy_actions(jnp.asarray(q), jnp.array([changed]), methods.get(method))
-    got = example.choose(q[0], changed, model)
-    assert [got[k] for k in ('primitive', 'rotation', 'row', 'col')] == [
-        int(getattr(action, k)[0]) for k in ('primitive', 'rotation', 'row', 'col')]
+    got = onnx_outputs(exported[2], *states[name], changed)
+    assert list(got['action'][0]) == [want[k] for k in ('primitive', 'rotation', 'row', 'col')]
+    assert got['action'].dtype == np.int32 and got['action'][0][0] == int(changed)
+    assert abs(float(got['value'][0]) - float(q_jax.reshape(2, -1)[int(changed)].max())) < 1e-4
 
 
 def test_example_script_prints_the_jax_action_without_jax(run, exported, parity, states,
@@ -230,12 +224,13 @@ def test_a_state_saved_by_mvcoba_viz_runs_through_the_onnx_example(run, exported
 @pytest.mark.parametrize('method, overrides', [
     ('mvp', []), ('cpg', []), ('mvcoba', ['network.pad_to_diagonal=true']),
     ('mvcoba_2fcn', ['network.shared_stages=1', 'network.pad_to_diagonal=true']),
-    ('mvcoba', ['network.suppress=true'])])
+    ('mvcoba', ['network.suppress=true']), ('grasp_only', [])])
 def test_other_networks_export_round_trip_with_onnx_parity(method, overrides, tmp_path):
-  """MVP (four viewpoints fused in the graph), CPG and MV-COBA with `network.suppress` (a second
-  output: the suppressed scores its rule compares), a network padded to the diagonal and one
-  that turns its features export like the others: the folder loads back as the same policy, ONNX matches JAX on every output, and
-  the example picks the agent's action from them."""
+  """MVP (four viewpoints fused in the graph), CPG and MV-COBA with `network.suppress` (an
+  output more: the suppressed scores its rule compares), a network padded to the diagonal, one
+  that turns its features and grasp-only (every rule of methods.py) export like the others: the
+  folder loads back as the same policy, and ONNX matches JAX on every output, the action its
+  rule picks inside the graph included."""
   (tmp_path / 'run').mkdir()
   trainer, workdir, _ = _workdir(resolve(TINY, [f'network.method={method}', *overrides]),
                                  tmp_path / 'run')
@@ -253,18 +248,19 @@ def test_other_networks_export_round_trip_with_onnx_parity(method, overrides, tm
   maps = agent.rule_maps(q, depth, trainer.method, config)
   session = ort.InferenceSession(str(paths['onnx']), providers=['CPUExecutionProvider'])
   names = [o['name'] for o in model_json['onnx']['outputs']]
-  assert names == (['q', 'score'] if method == 'cpg' or config.network.suppress else ['q'])
-  got = dict(zip(names, session.run(names, {'color': np.asarray(color),
-                                            'depth': np.asarray(depth)})))
-  assert float(np.abs(got['q'] - np.asarray(q)).max()) < TOLERANCE
-  rule_maps = got[model_json['action_rule']['maps']]
-  np.testing.assert_allclose(rule_maps, np.asarray(maps), rtol=1e-5, atol=TOLERANCE)
-  example = _example()
+  suppress = method == 'cpg' or config.network.suppress
+  assert names == ['q', *(['score'] if suppress else []), 'action', 'value']
+  assert [i['name'] for i in model_json['onnx']['inputs']] == ['color', 'depth', 'changed']
   for changed in (False, True):
-    want = agent.greedy_actions(maps, jnp.array([changed]), trainer.method)
-    chosen = example.choose(rule_maps[0], changed, model_json)
-    assert [chosen[k] for k in ('primitive', 'rotation', 'row', 'col')] == [
-        int(getattr(want, k)[0]) for k in ('primitive', 'rotation', 'row', 'col')]
+    got = onnx_outputs(session, color, depth, changed)
+    assert list(got) == names
+    assert float(np.abs(got['q'] - np.asarray(q)).max()) < TOLERANCE
+    np.testing.assert_allclose(got[model_json['action_rule']['maps']], np.asarray(maps),
+                               rtol=1e-5, atol=TOLERANCE)
+    want, score = agent.decide(q, depth, jnp.array([changed]), trainer.method, config)
+    assert list(got['action'][0]) == [int(getattr(want, k)[0])
+                                      for k in ('primitive', 'rotation', 'row', 'col')]
+    assert abs(float(got['value'][0]) - float(score[0])) < 1e-4
 
 
 def test_a_policy_that_fills_unseen_cells_acts_alike_in_jax_and_deploy(tmp_path):

@@ -62,7 +62,7 @@ def test_an_unsafe_action_is_refused(q, angle, position, match):
 
 SHIPPED = __import__('pathlib').Path(__file__).resolve().parents[2] / 'pretrained'
 ODD = [None, 'x', -1, 2 ** 70, 1e300, True, [], {}, [[1]], 0.5]
-FIELDS = ('format', 'action_rule.name', 'action_rule.maps', 'primitives.push', 'primitives.grasp',
+FIELDS = ('format', 'primitives.push', 'primitives.grasp',
           'rotations.num_rotations', 'rotations.angles_rad', 'heightmap.resolution_m',
           'heightmap.workspace_half_m', 'heightmap.grid_size', 'heightmap.num_views',
           'heightmap.views_used', 'onnx.file', 'config.perception.change_min',
@@ -81,7 +81,7 @@ def test_every_shipped_model_json_reads():
 def test_a_model_json_broken_where_an_action_depends_on_it_is_refused_naming_it(tmp_path):
   """Each field an action reads, dropped or set to each odd value in turn (fixed list): the file
   reads only where the value is still one the field allows, else one line naming the file and
-  the field; an unknown format or rule, NaN, and an ONNX file outside the folder are refused."""
+  the field; an unknown format, NaN, and an ONNX file outside the folder are refused."""
   import json
   import random
   from mvcoba_jax.deploy import DeployError, model_file
@@ -111,10 +111,9 @@ def test_a_model_json_broken_where_an_action_depends_on_it_is_refused_naming_it(
       except DeployError as e:
         refused += 1
         assert str(tmp_path / 'model.json') in str(e) and '\n' not in str(e), str(e)
-        assert dotted in str(e) or 'format' in str(e) or 'rule' in str(e), (dotted, str(e))
-  assert refused >= 90 and read <= 6, (refused, read)
-  for change, match in ((('format', 'mvcoba-jax-export/2'), 'format'),
-                        (('action_rule', {'name': 'spot', 'maps': 'q'}), "'spot' is unknown"),
+        assert dotted in str(e) or 'format' in str(e), (dotted, str(e))
+  assert refused >= 75 and read <= 6, (refused, read)
+  for change, match in ((('format', 'mvcoba-jax-export/3'), 'format'),
                         (('onnx', {'file': '../other/model.onnx'}), 'outside')):
     described = json.loads(json.dumps(base))
     described[change[0]] = change[1]
@@ -125,12 +124,19 @@ def test_a_model_json_broken_where_an_action_depends_on_it_is_refused_naming_it(
     model_file.read(write(None, text))
 
 
-def test_deploy_knows_every_rule_a_method_can_have():
-  """A Rule added to methods.py without its runtime counterpart would be refused by deploy
-  (model_file.read); this test says so before any export meets it."""
-  from mvcoba_jax import methods
-  from mvcoba_jax.deploy import model_file
-  assert set(model_file.RULES) == set(methods.RULES)
+def test_an_export_whose_graph_leaves_the_rule_out_loads_its_parameters_but_cannot_act(tmp_path):
+  """Format 1 (the graph stopped at the maps): its parameters still read, and deploy refuses to
+  act on its graph, naming the command that exports it again."""
+  import json
+  from mvcoba_jax.deploy import DeployError, OnnxPolicy, model_file
+  described = json.loads((SHIPPED / 'mvcoba' / 'model.json').read_text())
+  assert described['format'] == model_file.FORMAT
+  described['format'] = 'mvcoba-jax-export/1'
+  (tmp_path / 'model.json').write_text(json.dumps(described))
+  assert not model_file.read(tmp_path).graph_decides
+  pytest.importorskip('onnxruntime')
+  with pytest.raises(DeployError, match='leaves the action rule to the runtime; export it again'):
+    OnnxPolicy(tmp_path)
 
 
 def test_the_robot_loop_refuses_a_negative_count_before_loading(capsys):

@@ -114,17 +114,42 @@ def test_the_readme_is_for_users():
   assert len(lines) <= 150 and max(map(len, lines)) <= 120
 
 
-def test_every_gap_the_readme_states_is_a_separation_of_the_landed_results():
-  """Each '(gap N ...)' of the README's results prose is the gap of a separation that the
-  reproduction's results give (`paper.separations`, recomputed from results.json), to its
-  digits: a claim of 'A > B' in the README rests on intervals that are disjoint by that much."""
+# page -> the landed results (folders of results.json, joined) its separations rest on.
+SEPARATION_PAGES = {
+    'README.md': [('docs/results/reproduction',),
+                  ('docs/results/recipe/winning/claim', 'docs/results/reproduction')],
+    'docs/results/reproduction.md': [('docs/results/reproduction',),
+                                     ('docs/results/reproduction/online',)],
+    'docs/results/winning-policy.md': [('docs/results/recipe/winning/claim',
+                                        'docs/results/reproduction')],
+}
+
+
+def test_every_separation_a_page_states_is_recomputed_from_its_results():
+  """Each 'A > B (gap N)' line, and each '(gap N' of the prose, in README.md and the pages of
+  docs/results is recomputed from the results.json it rests on (`paper.comparisons` over the
+  joined folders): a line to the letter, a gap to its digits. A page stating a gap without its
+  results named in SEPARATION_PAGES fails, so no claim of 'A > B' goes unchecked."""
   import re
 
   from mvcoba_jax.evaluation import paper, report
-  results = report.joined_report([str(ROOT / 'docs' / 'results' / 'reproduction')])
-  gaps = [float(g) for g in re.findall(r'\(gap (-?[\d.]+)\)', paper.comparisons(results))]
-  stated = re.findall(r'\(gap (\d+(?:\.\d+)?)', (ROOT / 'README.md').read_text())
-  assert stated, 'the README states no gap'
-  for text in stated:
-    digits = len(text.partition('.')[2])
-    assert any(round(g, digits) == float(text) for g in gaps), text
+  pages = [ROOT / 'README.md', *sorted((ROOT / 'docs' / 'results').glob('*.md'))]
+  checked = 0
+  for page in pages:
+    text, name = page.read_text(), str(page.relative_to(ROOT))
+    stated = re.findall(r'\(gap (\d+(?:\.\d+)?)', text)
+    if not stated:
+      continue
+    assert name in SEPARATION_PAGES, f'{name} states gaps but names no results they rest on'
+    computed = '\n'.join(paper.comparisons(report.joined_report([str(ROOT / f) for f in folders]))
+                          for folders in SEPARATION_PAGES[name])
+    lines = set(computed.splitlines())
+    gaps = [float(g) for g in re.findall(r'\(gap (-?[\d.]+)\)', computed)]
+    for line in text.splitlines():
+      if line.startswith('- ') and ' > ' in line and '(gap' in line:
+        assert line in lines, f'{name}: {line}'
+    for gap in stated:
+      digits = len(gap.partition('.')[2])
+      assert any(round(g, digits) == float(gap) for g in gaps), f'{name}: gap {gap}'
+      checked += 1
+  assert checked >= 3

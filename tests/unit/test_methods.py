@@ -61,3 +61,46 @@ def test_a_malformed_or_unknown_method_is_refused():
                    rule=methods.ALWAYS_GRASP)
   with pytest.raises(ValueError, match="unknown network method 'nope'; allowed: mvcoba"):
     methods.get('nope')
+
+
+@pytest.mark.filterwarnings('ignore::DeprecationWarning')
+def test_a_new_rule_reaches_the_exported_graph_and_one_it_cannot_trace_is_refused():
+  """A toy rule decides inside the ONNX graph as the agent does; one written with integer `//`
+  (a jitted jnp helper jax2onnx cannot trace) is refused, naming the method and why."""
+  ort = pytest.importorskip('onnxruntime')
+  pytest.importorskip('jax2onnx')
+  from mvcoba_jax import perception
+  pushes = methods.Rule('push', 'always push',
+                        lambda changed, best: jnp.zeros(changed.shape, jnp.int32),
+                        future_over_both=False, explores_primitive=False,
+                        compares_primitives=False)
+  where = methods.Rule('where', 'grasp after a change',
+                       lambda changed, best: changed.astype(jnp.int32) * GRASP // 1,
+                       future_over_both=False, explores_primitive=False,
+                       compares_primitives=False)
+  for name, rule in (('toy_pushes', pushes), ('toy_where', where)):
+    methods.register(methods.Method(name, fcns=(methods.Fcn((PUSH, GRASP), (0,)),), rule=rule))
+  try:
+    config = resolve('tiny', ['network.method=toy_pushes'])
+    model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
+    session = ort.InferenceSession(export.onnx_model(config, model).SerializeToString(),
+                                   providers=['CPUExecutionProvider'])
+    side = perception.grid_size(config)
+    color = jax.random.uniform(jax.random.PRNGKey(1), (1, 2, side, side, 3))
+    depth = jax.random.uniform(jax.random.PRNGKey(2), (1, 2, side, side)) * 0.05
+    action, value = session.run(['action', 'value'], {
+        'color': np.asarray(color), 'depth': np.asarray(depth), 'changed': np.array([True])})
+    want, score = agent.decide(model(color, depth), depth, jnp.array([True]), model.method,
+                               config)
+    assert action[0].tolist() == [PUSH, int(want.rotation[0]), int(want.row[0]),
+                                  int(want.col[0])]
+    assert abs(float(value[0]) - float(score[0])) < 1e-4
+    config = resolve('tiny', ['network.method=toy_where'])
+    model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
+    from mvcoba_jax.policy import PolicyError
+    with pytest.raises(PolicyError, match='toy_where: its decision does not convert to ONNX .*'
+                                          'cannot trace'):
+      export.onnx_model(config, model)
+  finally:
+    for name in ('toy_pushes', 'toy_where'):
+      methods.unregister(name)
