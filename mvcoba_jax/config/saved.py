@@ -59,7 +59,8 @@ LEGACY = {TrainConfig: {'target': 'network', 'failed_grasp_reward': 0.5,
                         'quarter_turns': False, 'replay_ratio': 0.0},
           EnvConfig: {'drop': 'spread', 'heap_half': 0.125, 'occluded_share': 0.0,
                       'packed_share': 0.0},
-          NetworkConfig: {'pad_to_diagonal': False, 'shared_stages': 0, 'suppress': False},
+          NetworkConfig: {'pad_to_diagonal': False, 'shared_stages': 0, 'suppress': False,
+                          'push_room': 0.0},
           PerceptionConfig: {'failed_grasp_changes': True, 'fill_unseen': False}}
 
 # Fields that choose where a run computes, not what it computes: a saved config that lacks them

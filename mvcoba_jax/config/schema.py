@@ -68,10 +68,14 @@ class NetworkConfig:
   # suppresses always does: beyond MV-COBA, whose change rule then picks its primitive's best
   # allowed action.
   suppress: bool = False
+  # With suppression: a push is also suppressed where the workspace's border lies less than this
+  # far (m) ahead of its start along its direction, so pushes head into the table, not over its
+  # edge; 0 allows any direction (CPG).
+  push_room: float = 0.0
 
   def __post_init__(self):
     check(self, 'network.', {'trunk': TRUNKS, 'stem_patch': Between(1, 16),
-                             'shared_stages': Between(0, 16),
+                             'shared_stages': Between(0, 16), 'push_room': Between(0, 1),
                              'features': Between(1, 4096), 'groups': Between(1, 512)})
     if not self.features:
       raise ConfigError('network.features: at least one stage')

@@ -39,7 +39,8 @@ def rule_maps(q, depth, method: Method, config: Config):
     return q
   return suppression.scores(q, surface_height(depth, method.views),
                             config.perception.heightmap_resolution,
-                            per_primitive=not method.rule.compares_primitives)
+                            per_primitive=not method.rule.compares_primitives,
+                            push_room=config.network.push_room)
 
 
 def greedy_actions(q, changed, method: Method) -> PixelAction:

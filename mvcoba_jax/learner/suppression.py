@@ -54,9 +54,10 @@ def _dilate(x, radius: int):
   return jax.lax.reduce_window(x, -jnp.inf, jax.lax.max, (1, size, size), (1, 1, 1), 'SAME')
 
 
-def factors(height, num_rotations: int, resolution: float):
+def factors(height, num_rotations: int, resolution: float, push_room: float = 0.0):
   """(B, 2, K, R, R) factors in [0, 1] (PUSH, GRASP) of every rotation and cell, from the
-  surface height (B, R, R) the method sees; 0 suppresses."""
+  surface height (B, R, R) the method sees; 0 suppresses. With `push_room` (m), also every push
+  whose start has less room than that to the workspace's border along its direction."""
   b, side, _ = height.shape
   occupied = (height > OBJECT_HEIGHT).astype(jnp.float32)
   angle = rotation_angle(jnp.arange(num_rotations), num_rotations)
@@ -73,16 +74,34 @@ def factors(height, num_rotations: int, resolution: float):
   maps = rotate_images(maps, jnp.tile(angle, b)).reshape(b, num_rotations, side, side, 2)
   ring = (_dilate(occupied, _cells(PUSH_RING[1], resolution))
           * (1.0 - _dilate(occupied, _cells(PUSH_RING[0], resolution))))
-  masks = jnp.stack([ring, occupied], axis=1)[:, :, None]  # (B, 2, 1, R, R)
+  room = (room_ahead(side, num_rotations, resolution) >= push_room).astype(jnp.float32)
+  pushes = ring[:, None] * room  # (B, K, R, R)
+  masks = jnp.stack([pushes, jnp.broadcast_to(occupied[:, None], pushes.shape)], axis=1)
   return jnp.clip(jnp.moveaxis(maps, -1, 1), 0.0, 1.0) * masks
 
 
-def scores(q, height, resolution: float, per_primitive: bool = False):
+def room_ahead(side: int, num_rotations: int, resolution: float):
+  """(K, R, R) distance (m) from each cell's centre to the square workspace's border along each
+  rotation's push direction (counter-clockwise from +col towards +row)."""
+  half = side * resolution / 2
+  centre = -half + (jnp.arange(side) + 0.5) * resolution
+  angle = rotation_angle(jnp.arange(num_rotations), num_rotations)[:, None, None]
+  x, y = centre[None, None, :], centre[None, :, None]
+
+  def along(position, step):  # distance to the border on one axis; inf when not moving on it
+    target = jnp.where(step > 0, half, -half)
+    return jnp.where(jnp.abs(step) > 1e-9, (target - position) / jnp.where(
+        jnp.abs(step) > 1e-9, step, 1.0), jnp.inf)
+  return jnp.minimum(along(x, jnp.cos(angle)), along(y, jnp.sin(angle)))
+
+
+def scores(q, height, resolution: float, per_primitive: bool = False, push_room: float = 0.0):
   """The maps CPG's rule compares: (Q + 0.1) x factor where the factor allows, NO_ACTION where
   it suppresses; for a state with no allowed action at all, its raw Q maps (with
   `per_primitive`, for a rule that is given its primitive: a primitive with no allowed action
-  keeps its raw Q map). `q` (B, 2, K, R, R) holds every rotation in order."""
-  f = factors(height, q.shape[2], resolution)
+  keeps its raw Q map). `q` (B, 2, K, R, R) holds every rotation in order; `push_room`:
+  `factors`'."""
+  f = factors(height, q.shape[2], resolution, push_room)
   allowed = f > 0
   weighted = jnp.where(allowed, (q + Q_OFFSET) * f, NO_ACTION)
   anything = jnp.any(allowed, axis=(2, 3, 4) if per_primitive else (1, 2, 3, 4), keepdims=True)

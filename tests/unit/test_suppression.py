@@ -105,3 +105,21 @@ def test_a_given_primitive_with_nothing_allowed_keeps_its_raw_map():
   assert (compared[:, PUSH] == networks.NO_ACTION).all()
   action = agent.greedy_actions(jnp.asarray(compared), jnp.zeros(1, bool), methods.get('cpg'))
   assert int(action.primitive[0]) == GRASP
+
+
+def test_push_room_keeps_pushes_from_heading_over_the_border():
+  """A cube 2 cm from the +x border: pushing it +x (towards the border, 3 cm of room) is allowed
+  without `push_room` and suppressed with 15 cm; pushing it -x from its border side (room 38 cm)
+  stays allowed; the room of a cell is its distance to the border along the push."""
+  height = blocks((50, 95))  # cols 95-106 of 112: the cube's +x face 5 cells from the border
+  room = np.asarray(suppression.room_ahead(SIDE, K, RES))
+  assert abs(room[0, 56, 90] - (SIDE - 90 - 0.5) * RES) < 1e-6  # +x from col 90
+  assert abs(room[8, 56, 90] - (90 + 0.5) * RES) < 1e-6  # -x
+  assert abs(room[4, 10, 56] - (SIDE - 10 - 0.5) * RES) < 1e-6  # +y (rows)
+  free = np.asarray(suppression.factors(height, K, RES))
+  kept = np.asarray(suppression.factors(height, K, RES, push_room=0.15))
+  assert free[0, PUSH, 0, 56, 91] > 0 and kept[0, PUSH, 0, 56, 91] == 0  # +x, 8.4 cm of room
+  assert free[0, PUSH, 8, 56, 110] > 0 and kept[0, PUSH, 8, 56, 110] > 0  # -x, 44.2 cm
+  np.testing.assert_array_equal(free[:, GRASP], kept[:, GRASP])
+  np.testing.assert_array_equal(np.asarray(suppression.factors(height, K, RES, push_room=0.0)),
+                                free)
