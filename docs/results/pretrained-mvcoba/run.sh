@@ -1,20 +1,23 @@
 #!/usr/bin/env bash
-# What a user of `mvcoba-train` gets (issue 52): the default preset (6000 actions), seed 0, from the
-# reproduction's worktree, evaluated like the reproduction (every shipped suite, 5 runs per case,
-# both protocols); resumable: run again after a stop.
-cd /work/repro-tree
-export PYTHONPATH=/work/repro-tree PATH=/work/main/.venv/bin:$PATH
-w=/work/pretrained-default log=/work/pretrained-default/runs.txt
+# What a user of `mvcoba-train` gets: the default preset (6000 actions), seed 0, from a worktree at
+# the commit that made it the default, evaluated like the reproduction (every shipped suite, 5 runs
+# per case, both protocols); resumable: run again after a stop.
+cd /work/win-tree
+export PYTHONPATH=/work/win-tree PATH=/work/main/.venv/bin:$PATH
+w=/work/pretrained-winning log=/work/pretrained-winning/runs.txt
 echo "start $(date -u +%FT%TZ) commit $(git rev-parse --short HEAD)" >> $log
 if [ ! -f $w/mvcoba-s0/eval_summary.json ]; then
   [ -d $w/mvcoba-s0/checkpoints ] && again=--resume || again=--overwrite
   mvcoba-train --workdir $w/mvcoba-s0 $again > $w/train.log 2>&1 || { echo "train rc $?" >> $log; exit 1; }
 fi
+echo "trained $(date -u +%FT%TZ)" >> $log
 for protocol in frozen online; do
   [ -f $w/eval-$protocol/done ] && continue
   flag=; [ $protocol = online ] && flag=--online
   mvcoba-eval --checkpoint $w/mvcoba-s0 --suite random ordered occluded vpg --runs 5 \
     --out $w/eval-$protocol --resume $flag > $w/eval-$protocol.log 2>&1 \
     && touch $w/eval-$protocol/done || { echo "eval $protocol rc $?" >> $log; exit 1; }
+  echo "evaluated $protocol $(date -u +%FT%TZ)" >> $log
 done
 echo "end $(date -u +%FT%TZ)" >> $log
+# Landed with: bash experiments/land_pretrained.sh /work/pretrained-winning fd55f64
