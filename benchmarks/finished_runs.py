@@ -46,12 +46,12 @@ def step_cost(suite: str, repeats: int) -> dict:
   layouts = stack_layouts([case_to_layout(c, env) for c in cases])
   states, _ = jax.jit(lambda l, k: suite_cases.start(env, l, k))(
       layouts, jax.random.split(jax.random.PRNGKey(0), n))
-  policy = runner.heuristic_policy(config.env.num_rotations)
+  policy = runner.heuristic_actor(config.env.num_rotations)
 
   @jax.jit
   def action(states, key):
     begun = task.begin(env, states)
-    chosen = policy(begun.obs, begun.changed, jax.random.split(key, n), None)
+    chosen = policy.choose(begun.obs, begun.changed, jax.random.split(key, n), None)
     return task.step(env, (0, 1), begun, chosen, config.train)
 
   emptied = jax.jit(jax.vmap(env.emptied))(states)
@@ -72,7 +72,7 @@ def whole_suite(suite: str, checkpoint: str, runs: int) -> dict:
   cases = [read_case(f) for f in suite_files([suite])[suite]]
   source = trained(checkpoint)
   env = Tabletop(suite_cases.suite_config(source.config, suite_cases.pool_for(cases)))
-  policy, views = source.policy(env.config, FROZEN)
+  policy, views = source.actor(env.config, FROZEN)
   layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
   keys = jax.random.split(jax.random.PRNGKey(0), len(cases) * runs)
   n = len(cases) * runs

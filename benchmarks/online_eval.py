@@ -1,6 +1,6 @@
 """What the online test protocol costs against the frozen one (`mvcoba-eval --online`).
 
-For each suite, evaluates one policy frozen and online (`runner.OnlinePolicy`: every run
+For each suite, evaluates one policy frozen and online (`runner.Online`: every run
 takes one SGD step after each of its actions) with --runs per case and the 60-action cap, each
 twice in turn: the first call compiles (every batch size the runs move through), the second is
 timed warm. Online runs take other actions than frozen ones, so besides each suite's wall time
@@ -37,7 +37,7 @@ def suite_costs(suite: str, source, runs: int) -> dict:
   keys = jax.random.split(jax.random.PRNGKey(0), len(cases) * runs)
   row = {'suite': suite, 'runs': len(cases) * runs}
   for protocol in ('frozen', 'online'):
-    policy, views = source.policy(env.config, PROTOCOLS[protocol])
+    policy, views = source.actor(env.config, PROTOCOLS[protocol])
     for timing in ('first_s', 'warm_s'):
       start = time.perf_counter()
       logs = runner.run_logs(runner.evaluate(env, policy, views, layouts, keys, 60))

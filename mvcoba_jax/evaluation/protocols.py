@@ -1,5 +1,5 @@
 """The test protocols a trained network is evaluated under. Each names itself, labels its rows and
-says what it does (`sources.Source.policy` plays it); a protocol is read by its name here and
+says what it does (`sources.Source.actor` plays it); a protocol is read by its name here and
 nowhere else."""
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import pathlib
 class Protocol:
   name: str
   description: str
-  learns: bool = False  # every run takes one SGD step after each action (`runner.OnlinePolicy`)
+  learns: bool = False  # every run takes one SGD step after each action (`runner.Online`)
   no_repeat: bool = False  # a run never repeats a failed action while nothing has changed
   # Wall time per case run over the frozen protocol's on a 2-core CPU (online: 1.9-2.7,
   # benchmarks/online_eval.py).

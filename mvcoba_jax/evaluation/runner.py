@@ -1,6 +1,6 @@
 """Evaluation of a policy on test cases: every (case, run) pair of a suite in lockstep, the
 trained network frozen and greedy (one compiled loop) or going on learning in every run
-(`OnlinePolicy`, the paper's test protocol).
+(`Online`, the paper's test protocol), each an `Actor` the loop plays alike.
 
 Each run starts from its case (padded to the scene's object slots) with a few millimetres and
 degrees of placement noise, so the n runs of a case differ as real resets do. A run ends when
@@ -28,12 +28,36 @@ from mvcoba_jax.sim.geometry import pixel_to_world
 from mvcoba_jax.sim.tabletop import Layout, Tabletop, where_envs
 from mvcoba_jax.suites.cases import start
 
-# policy(obs (N,), changed (N,), keys (N, 2), failed) -> agent.PixelAction; per-run keys keep
-# each run's draws independent of the batch it is evaluated in; `failed` is each run's failed
-# actions since the scene last changed, (N, F, 4: primitive, rotation, row, col) and how many
-# of them hold one (N,), for a policy that avoids repeating them.
-Policy = Callable[[perception.Observation, jnp.ndarray, jnp.ndarray,
-                   tuple[jnp.ndarray, jnp.ndarray]], agent.PixelAction]
+class Actor:
+  """What an evaluation plays, one signature for every protocol and baseline: `init(obs)` gives
+  its per-run state (the carry; None when it keeps none), `act(carry, obs, changed, active,
+  keys, failed)` each run's action and the carry after it, `observe(carry, transition, done,
+  active)` the carry once the action's transition is known (`task.transition`). `keys` (N, 2)
+  keep each run's draws independent of its batch; `failed` is each run's failed actions since
+  the scene last changed, (N, F, 4: primitive, rotation, row, col), and how many it holds (N,).
+  `learns`: `act` takes an SGD step, which XLA's CPU backend runs faster from a loop on the
+  host (`advance_on_host`). Actors are hashed by identity: the compiled loop keys on them."""
+  learns = False
+
+  def init(self, obs: perception.Observation):
+    return None
+
+  def act(self, carry, obs, changed, active, keys, failed):
+    raise NotImplementedError
+
+  def observe(self, carry, transition: replay_lib.Transition, done, active):
+    return carry
+
+
+class Frozen(Actor):
+  """An actor that keeps nothing between actions: `choose(obs, changed, keys, failed)` ->
+  agent.PixelAction (the trained network's greedy rule, or a baseline)."""
+
+  def __init__(self, choose: Callable):
+    self.choose = choose
+
+  def act(self, carry, obs, changed, active, keys, failed):
+    return self.choose(obs, changed, keys, failed), carry
 
 
 @struct.dataclass
@@ -74,7 +98,7 @@ class Runs:
   tried: jnp.ndarray
   repeated_failures: jnp.ndarray
   trace: Trace | None = None
-  learner: Any = None  # online evaluation: each run's `Learner` as the run ended
+  carry: Any = None  # the actor's per-run state as the run ended (online: its `Learner`)
 
 
 @struct.dataclass
@@ -88,12 +112,13 @@ class Learner:
   pending_valid: jnp.ndarray  # (B,) bool
 
 
-class OnlinePolicy:
+class Online(Actor):
   """A trained network that goes on learning in every run, the test protocol of VPG and the
   MV-COBA authors: each run starts from the trained parameters and, after each action, takes one
   SGD step on its previous transition with the loss, targets and optimiser of `config.train`.
   Every run holds its own copy (stacked along the run axis), so a run learns from its own
   transitions only; a finished run learns no more."""
+  learns = True
 
   def __init__(self, model: networks.QNetwork, config: Config):
     self.graphdef, self.params = nnx.split(model)
@@ -109,16 +134,13 @@ class OnlinePolicy:
     """Every run of the batch (B,) with the trained parameters and nothing to learn yet."""
     n = obs.depth.shape[0]
     params = jax.tree.map(lambda x: jnp.broadcast_to(x, (n,) + x.shape), self.params)
-    zeros = lambda dtype: jnp.zeros(n, dtype)
-    pending = replay_lib.Transition(
-        obs=obs, next_obs=obs, primitive=zeros(jnp.int32), rotation=zeros(jnp.int32),
-        row=zeros(jnp.int32), col=zeros(jnp.int32), reward=zeros(jnp.float32),
-        done=zeros(jnp.bool_), changed=zeros(jnp.bool_), next_value=zeros(jnp.float32))
     return Learner(params=params, opt_state=jax.vmap(self.optimizer.init)(params),
-                   pending=pending, pending_valid=zeros(jnp.bool_))
+                   pending=replay_lib.Transition.empty(obs),
+                   pending_valid=jnp.zeros(n, jnp.bool_))
 
-  def act(self, learner: Learner, obs, changed):
-    """Each run's greedy action on its own Q maps, and the maps.
+  def act(self, learner: Learner, obs, changed, active, keys, failed):
+    """Each run's greedy action on its own Q maps; the forward also values the state its
+    waiting transition led to, and each active run learns from that transition (`learn`).
 
     The runs' forwards go one after the other (`lax.map`), each with its own weights: vmapped
     over the weights, XLA's CPU backend runs them as grouped convolutions, 3 times slower
@@ -126,7 +148,8 @@ class OnlinePolicy:
     one = lambda args: self.q_maps(args[0], jax.tree.map(lambda x: x[None], args[1]))[0]
     q = jax.lax.map(one, (learner.params, obs))
     maps = agent.rule_maps(q, obs.depth, self.method, self.config)
-    return agent.greedy_actions(maps, changed, self.method), q
+    return agent.greedy_actions(maps, changed, self.method), self.learn(learner, q, changed,
+                                                                        active)
 
   def learn(self, learner: Learner, q, changed, active) -> Learner:
     """One SGD step per run on its waiting transition, valued by `q` of the state it led to;
@@ -152,19 +175,12 @@ class OnlinePolicy:
     return learner.replace(params=keep(params, learner.params),
                            opt_state=keep(opt_state, learner.opt_state))
 
-  def remember(self, learner: Learner, obs, action: agent.PixelAction, out: task.Outcome,
-               active) -> Learner:
-    """The transition each active run just made, to learn from once its next state is valued; a
-    run that this action finished has no next state to value, and learns no more."""
-    t = self.config.train
-    no_future = ~out.info.healthy | (~out.changed if not t.bootstrap_no_change else False)
-    zeros = jnp.zeros_like(out.reward)
-    made = replay_lib.Transition(
-        obs=obs, next_obs=obs, primitive=action.primitive, rotation=action.rotation,
-        row=action.row, col=action.col, reward=out.reward, done=no_future,
-        changed=out.changed, next_value=zeros)
-    waits = active & ~out.done
-    return learner.replace(pending=where_envs(waits, made, learner.pending),
+  def observe(self, learner: Learner, transition: replay_lib.Transition, done, active
+              ) -> Learner:
+    """The transition each active run just made waits to be learned from once its next state
+    is valued; a run that this action finished has no next state to value, and learns no more."""
+    waits = active & ~done
+    return learner.replace(pending=where_envs(waits, transition, learner.pending),
                            pending_valid=waits)
 
 
@@ -176,7 +192,7 @@ class Batch:
   runs: Runs
   keys: jnp.ndarray  # (B, 2)
   t: jnp.ndarray  # int32: lockstep actions taken
-  learner: Learner | None = None  # online evaluation's learning (`OnlinePolicy`)
+  carry: Any = None  # the actor's per-run state (`Actor.init`)
 
 
 @functools.partial(jax.jit, static_argnames=('env', 'views', 'max_actions', 'record'))
@@ -215,9 +231,9 @@ def _snapshot(env, obs, states, action: agent.PixelAction, info, active) -> Trac
                mocap_pos=states.sim.mocap_pos, mocap_quat=states.sim.mocap_quat)
 
 
-@functools.partial(jax.jit, static_argnames=('env', 'policy', 'views', 'max_actions', 'record',
+@functools.partial(jax.jit, static_argnames=('env', 'actor', 'views', 'max_actions', 'record',
                                              'progress'))
-def advance(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch, max_actions: int,
+def advance(env: Tabletop, actor: Actor, views: tuple[int, ...], batch: Batch, max_actions: int,
             record: bool, progress, until, retired) -> Batch:
   """Lockstep actions until every run of the batch has finished, the action cap, or no more than
   `until` runs still going; `retired`: the finished runs outside this batch (for `progress`)."""
@@ -226,39 +242,34 @@ def advance(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch,
     return (still > 0) & (still > until) & (batch.t < max_actions)
 
   return jax.lax.while_loop(
-      going, lambda b: lockstep(env, policy, views, b, record, progress, retired), batch)
+      going, lambda b: lockstep(env, actor, views, b, record, progress, retired), batch)
 
 
-def advance_on_host(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch,
+def advance_on_host(env: Tabletop, actor: Actor, views: tuple[int, ...], batch: Batch,
                     max_actions: int, record: bool, progress, until, retired) -> Batch:
-  """`advance` with its loop on the host, one compiled lockstep action per call: what an online
-  policy runs on a CPU, where XLA runs an SGD update inside a loop body several times slower than
+  """`advance` with its loop on the host, one compiled lockstep action per call: what a learning
+  actor runs on a CPU, where XLA runs an SGD update inside a loop body several times slower than
   outside one (docs/design.md; training writes its steps out for the same reason)."""
   while True:
     still = int(jnp.sum(~batch.runs.finished))
     if not (still > 0 and still > until and int(batch.t) < max_actions):
       return batch
-    batch = _lockstep(env, policy, views, batch, record, progress, retired)
+    batch = _lockstep(env, actor, views, batch, record, progress, retired)
 
 
-def lockstep(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch, record: bool,
+def lockstep(env: Tabletop, actor: Actor, views: tuple[int, ...], batch: Batch, record: bool,
              progress, retired) -> Batch:
   """One lockstep action of every run of the batch; `retired`: the finished runs outside this
   batch (for `progress`)."""
-  online = isinstance(policy, OnlinePolicy)
   before, runs = batch.task, batch.runs
   obs = before.obs
   keys, k_act = jax.vmap(jax.random.split, out_axes=1)(batch.keys)
   active = ~runs.finished
-  learner = batch.learner
-  if online:
-    action, q = policy.act(learner, obs, before.changed)
-    learner = policy.learn(learner, q, before.changed, active)
-  else:
-    action = policy(obs, before.changed, k_act, (runs.failed, runs.tried))
+  action, carry = actor.act(batch.carry, obs, before.changed, active, k_act,
+                            (runs.failed, runs.tried))
   after, out = task.step(env, views, before, action, env.config.train)
-  if online:
-    learner = policy.remember(learner, obs, action, out, active)
+  carry = actor.observe(carry, task.transition(obs, after.obs, action, out, env.config.train),
+                        out.done, active)
   info = out.info
   count = lambda total, x: total + jnp.where(active, x, 0).astype(jnp.int32)
   is_grasp = action.primitive == agent.GRASP
@@ -280,10 +291,10 @@ def lockstep(env: Tabletop, policy: Policy, views: tuple[int, ...], batch: Batch
   # a fraction of the cost; nothing it does is counted.
   after = where_envs(active, after, before).replace(
       env=where_envs(runs.finished, jax.vmap(env.emptied)(after.env), after.env))
-  return Batch(task=after, runs=runs, keys=keys, t=batch.t + 1, learner=learner)
+  return Batch(task=after, runs=runs, keys=keys, t=batch.t + 1, carry=carry)
 
 
-_lockstep = jax.jit(lockstep, static_argnames=('env', 'policy', 'views', 'record', 'progress'))
+_lockstep = jax.jit(lockstep, static_argnames=('env', 'actor', 'views', 'record', 'progress'))
 
 
 def _repeats(runs: Runs, action: agent.PixelAction, out: task.Outcome, active):
@@ -304,12 +315,12 @@ def _repeats(runs: Runs, action: agent.PixelAction, out: task.Outcome, active):
   return failed, tried, repeated & active
 
 
-def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Layout, keys,
+def evaluate(env: Tabletop, actor: Actor, views: tuple[int, ...], layouts: Layout, keys,
              max_actions: int, record: bool = False,
              progress: Callable[[jnp.ndarray, jnp.ndarray], None] | None = None,
              smallest: int = 8) -> Runs:
-  """Runs the greedy `policy` from each layout (N,) with its key (N,); returns the counters.
-  An `OnlinePolicy` goes on learning in every run, each from its own transitions.
+  """Plays `actor` from each layout (N,) with its key (N,); returns the counters. An `Online`
+  actor goes on learning in every run, each from its own transitions.
 
   The runs step in lockstep in one compiled loop. Once no more than half of the batch is still
   going, those runs go on in a batch half the size (padded with finished runs), down to
@@ -321,17 +332,15 @@ def evaluate(env: Tabletop, policy: Policy, views: tuple[int, ...], layouts: Lay
   called on the host after every lockstep action: a large suite can take an hour on a CPU.
   """
   batch = begin(env, views, layouts, keys, max_actions, record)
-  if isinstance(policy, OnlinePolicy):
-    batch = batch.replace(learner=jax.jit(policy.init)(batch.task.obs))
+  batch = batch.replace(carry=jax.jit(actor.init)(batch.task.obs))
   n = layouts.in_play.shape[0]
-  size, members, runs = n, jnp.arange(n), batch.runs.replace(learner=batch.learner)
+  size, members, runs = n, jnp.arange(n), batch.runs.replace(carry=batch.carry)
+  loop = advance_on_host if actor.learns and jax.default_backend() == 'cpu' else advance
   while True:
     until = size // 2 if size // 2 >= smallest else -1
-    loop = (advance_on_host if isinstance(policy, OnlinePolicy)
-            and jax.default_backend() == 'cpu' else advance)
-    batch = loop(env, policy, views, batch, max_actions, record, progress, until, n - size)
+    batch = loop(env, actor, views, batch, max_actions, record, progress, until, n - size)
     runs = jax.tree.map(lambda whole, part: whole.at[members].set(part), runs,
-                        batch.runs.replace(learner=batch.learner))
+                        batch.runs.replace(carry=batch.carry))
     going = int(jnp.sum(~batch.runs.finished))
     if not going or int(batch.t) >= max_actions:
       return runs
@@ -377,17 +386,17 @@ def losses(trace: Trace, names: list[str], config: Config) -> list[dict]:
   return records
 
 
-def greedy_policy(q_maps: Callable, method: methods.Method, config,
-                  no_repeat: bool = False) -> Policy:
-  """A trained network's greedy policy: `q_maps(obs)` -> (N, 2, K, R, R). With `no_repeat` it
-  never takes a failed action of its run again while nothing has changed: the next best one."""
+def greedy_actor(q_maps: Callable, method: methods.Method, config,
+                 no_repeat: bool = False) -> Frozen:
+  """A trained network, frozen and greedy: `q_maps(obs)` -> (N, 2, K, R, R). With `no_repeat`
+  it never takes a failed action of its run again while nothing has changed: the next best one."""
 
-  def policy(obs, changed, keys, failed):
+  def choose(obs, changed, keys, failed):
     maps = agent.rule_maps(q_maps(obs), obs.depth, method, config)
     if no_repeat:
       maps = without(maps, *failed)
     return agent.greedy_actions(maps, changed, method)
-  return policy
+  return Frozen(choose)
 
 
 def without(maps, failed, tried):
@@ -400,10 +409,10 @@ def without(maps, failed, tried):
   return maps
 
 
-def heuristic_policy(num_rotations: int) -> Policy:
+def heuristic_actor(num_rotations: int) -> Frozen:
   """A baseline that needs no training: grasp the highest cell at a random rotation; after an
   action that changed nothing, push from the highest cell in a random direction."""
-  def policy(obs, changed, keys, failed):
+  def choose(obs, changed, keys, failed):
     height = jnp.max(obs.depth, axis=1)  # (N, R, R) over both views
     n, r, _ = height.shape
     cell = jnp.argmax(height.reshape(n, -1), axis=-1)
@@ -412,4 +421,4 @@ def heuristic_policy(num_rotations: int) -> Policy:
     return agent.PixelAction(primitive=jnp.where(changed, agent.GRASP, agent.PUSH).astype(jnp.int32),
                              rotation=rotation.astype(jnp.int32), row=row.astype(jnp.int32),
                              col=col.astype(jnp.int32))
-  return policy
+  return Frozen(choose)

@@ -218,7 +218,7 @@ def _row(spec: EvalSpec, suite: str, cases, label: str, source: sources_lib.Sour
   env = Tabletop(suite_cases.suite_config(source.config if source.trained else base,
                                            suite_cases.pool_for(cases)),
                  frames=video.FRAMES_PER_PRIMITIVE if spec.video else 0)
-  policy, views = source.policy(env.config, spec.protocol)
+  actor, views = source.actor(env.config, spec.protocol)
   layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
   keys = jax.random.split(jax.random.PRNGKey(spec.seed), len(cases) * runs)
   say(f'{suite}: {label}, {len(cases)} cases x {runs} runs, up to {spec.max_actions} actions '
@@ -229,7 +229,7 @@ def _row(spec: EvalSpec, suite: str, cases, label: str, source: sources_lib.Sour
     def progress(done, finished, bar=bar, n=len(layouts.in_play)):
       bar.set_postfix_str(f'{int(finished)}/{n} runs finished', refresh=False)
       bar.update(int(done) - bar.n)
-    result = runner.evaluate(env, policy, views, layouts, keys, spec.max_actions,
+    result = runner.evaluate(env, actor, views, layouts, keys, spec.max_actions,
                              record=spec.save_visuals or spec.video, progress=progress)
     logs = runner.run_logs(result)
   names = [c.name for c in cases]

@@ -14,7 +14,7 @@ from mvcoba_jax.config import Config
 from mvcoba_jax.evaluation import runner
 from mvcoba_jax.evaluation.protocols import Protocol
 
-BASELINES = ('heuristic',)  # policies without training (`runner.heuristic_policy`)
+BASELINES = ('heuristic',)  # policies without training (`runner.heuristic_actor`)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -38,17 +38,17 @@ class Source:
             'params': policy_lib.fingerprint(self.network) if self.trained else None,
             'training': self.training, 'training_seed': self.training_seed}
 
-  def policy(self, config: Config, protocol: Protocol):
-    """(policy, views) playing this source's runs in `config` under `protocol` (a baseline is
+  def actor(self, config: Config, protocol: Protocol):
+    """(actor, views) playing this source's runs in `config` under `protocol` (a baseline is
     evaluated frozen only: `evaluate` refuses the others)."""
     if not self.trained:
-      return runner.heuristic_policy(config.env.num_rotations), (0, 1)
+      return runner.heuristic_actor(config.env.num_rotations), (0, 1)
     method = self.network.method  # `networks.QNetwork` carries its method
     if protocol.learns:
-      return runner.OnlinePolicy(self.network, config), method.views
+      return runner.Online(self.network, config), method.views
     graphdef, params = nnx.split(self.network)
     q_maps = lambda obs: nnx.merge(graphdef, params)(obs.color, obs.depth)
-    return runner.greedy_policy(q_maps, method, config, protocol.no_repeat), method.views
+    return runner.greedy_actor(q_maps, method, config, protocol.no_repeat), method.views
 
 
 def trained(path, overrides=()) -> Source:

@@ -37,6 +37,13 @@ class Transition:
   changed: jnp.ndarray  # bool: the action rule's change flag at s_{t+1} (MV-COBA's target primitive)
   next_value: jnp.ndarray  # float32: max Q(s_{t+1}) from the acting forward (train.target='acting')
 
+  @classmethod
+  def empty(cls, obs: Observation) -> Transition:
+    """Transitions (B,) of nothing: `obs` as both states, every scalar zero; what waits for a
+    first action's transition."""
+    zeros = {name: jnp.zeros(obs.depth.shape[0], dtype) for name, dtype in _SCALARS.items()}
+    return cls(obs=obs, next_obs=obs, **zeros)
+
 
 _SCALARS = dict(primitive=jnp.int32, rotation=jnp.int32, row=jnp.int32, col=jnp.int32,
                 reward=jnp.float32, done=jnp.bool_, changed=jnp.bool_, next_value=jnp.float32)

@@ -17,6 +17,7 @@ from flax import struct
 from mvcoba_jax import perception
 from mvcoba_jax.config import TrainConfig
 from mvcoba_jax.learner import agent
+from mvcoba_jax.learner.replay import Transition
 from mvcoba_jax.sim.tabletop import EnvState, StepInfo, Tabletop, where_envs
 
 
@@ -90,3 +91,21 @@ def step(env: Tabletop, views: tuple[int, ...], state: State, action: agent.Pixe
   return (State(env=states, obs=next_obs, changed=changed, failures=failures),
           Outcome(info=info, changed=changed, reward=reward, failures=failures, cleared=cleared,
                   done=done))
+
+
+def transition(before: perception.Observation, after: perception.Observation,
+               action: agent.PixelAction, out: Outcome, train: TrainConfig) -> Transition:
+  """The transition (B,) an action made, as training and online evaluation learn from it.
+
+  The task goes on past an episode's end (docs/design.md; VPG does the same): the action that
+  ended one bootstraps from the fresh tabletop `after` shows, which the rule meets as after a
+  change. A zero future there made clearing the last object worth less than a failed grasp that
+  nudged it (0.5 + gamma * Q > 1), and the learned policy avoided clearing. Only bad physics
+  does not bootstrap (its next state is not a state of the task), nor, with
+  `train.bootstrap_no_change` off, an action that changed nothing."""
+  healthy = out.info.healthy
+  no_future = ~healthy | (~out.changed if not train.bootstrap_no_change else False)
+  return Transition(obs=before, primitive=action.primitive, rotation=action.rotation,
+                    row=action.row, col=action.col, reward=out.reward,
+                    next_obs=where_envs(healthy, after, before), done=no_future,
+                    changed=out.changed | out.done, next_value=jnp.zeros_like(out.reward))

@@ -18,7 +18,7 @@ from mvcoba_jax.config import Config
 from mvcoba_jax.learner import agent, networks, task
 from mvcoba_jax.learner import replay as replay_lib
 from mvcoba_jax.sim import reserve as reserve_lib
-from mvcoba_jax.sim.tabletop import Tabletop, where_envs
+from mvcoba_jax.sim.tabletop import Tabletop
 
 
 @struct.dataclass
@@ -107,18 +107,14 @@ class Trainer:
     begun = task.begin(self.env, jax.tree.map(lambda x: x[:b], dropped), self.per_env)
     obs = begun.obs
     example = jax.tree.map(lambda x: x[0], obs)
-    zeros = lambda dtype: jnp.zeros(b, dtype)
-    pending = replay_lib.Transition(
-        obs=obs, next_obs=obs, primitive=zeros(jnp.int32), rotation=zeros(jnp.int32),
-        row=zeros(jnp.int32), col=zeros(jnp.int32), reward=zeros(jnp.float32),
-        done=zeros(jnp.bool_), changed=zeros(jnp.bool_), next_value=zeros(jnp.float32))
     return TrainState(
         task=begun,
         reserve=reserve_lib.Reserve(states=jax.tree.map(lambda x: x[b:], dropped),
                                     available=jnp.int32(2 * b)),
         params=params, target_params=params, opt_state=self.optimizer.init(params),
         replay=replay_lib.Replay.create(self.config.train.replay_capacity, example),
-        pending=pending, pending_valid=jnp.bool_(False), key=key, actions=jnp.int32(0),
+        pending=replay_lib.Transition.empty(obs), pending_valid=jnp.bool_(False), key=key,
+        actions=jnp.int32(0),
         updates=jnp.int32(0), skipped_updates=jnp.int32(0), episodes=jnp.int32(0))
 
   # ---------------------------------------------------------------- learning
@@ -199,17 +195,7 @@ class Trainer:
                                               state.reserve, after.env, done, k_reset)
     after = task.restart(self.env, after, done, env_states, self.per_env)
 
-    # The task goes on past an episode's end (docs/design.md; VPG does
-    # the same): the action that ended an episode bootstraps from the fresh tabletop the robot
-    # sees next. A zero future there made clearing the last object worth less than a failed
-    # grasp that nudged it (0.5 + gamma * Q > 1), and the learned policy avoided clearing.
-    # Only bad physics does not bootstrap: its next state is not a state of the task.
-    # No future after an action that changed nothing, with `train.bootstrap_no_change` off.
-    no_future = ~healthy | (~changed if not t.bootstrap_no_change else False)
-    transition = replay_lib.Transition(
-        obs=before.obs, primitive=action.primitive, rotation=action.rotation, row=action.row,
-        col=action.col, reward=out.reward, next_obs=where_envs(healthy, after.obs, before.obs),
-        done=no_future, changed=changed | done, next_value=jnp.zeros_like(out.reward))
+    transition = task.transition(before.obs, after.obs, action, out, t)
     if t.target == 'acting':
       # The last step's transitions led to the states acted on now (or ended in bad physics,
       # which does not bootstrap): this step's forward values their next states.

@@ -35,7 +35,7 @@ def setup(tmp_path_factory):
   config = resolve('tiny')
   cases = [read_case(folder / name) for name in CASES]
   env = Tabletop(suite_cases.suite_config(config, suite_cases.pool_for(cases)))
-  policy = runner.heuristic_policy(config.env.num_rotations)
+  policy = runner.heuristic_actor(config.env.num_rotations)
   run = lambda l, k: runner.evaluate(env, policy, (0, 1), l, k, MAX_ACTIONS)
   layouts = stack_layouts([case_to_layout(c, env) for c in cases])
   keys = jax.random.split(jax.random.PRNGKey(0), len(cases))
@@ -99,7 +99,7 @@ def test_runs_moved_to_a_smaller_batch_end_as_in_the_whole_batch(setup, one_and_
   one, three = one_and_three
   four = stack_layouts([one, one, one, three])
   keys = jax.random.split(jax.random.PRNGKey(3), 4)
-  policy = runner.heuristic_policy(env.config.env.num_rotations)
+  policy = runner.heuristic_actor(env.config.env.num_rotations)
   run = lambda smallest: runner.evaluate(env, policy, (0, 1), four, keys, MAX_ACTIONS,
                                              record=True, smallest=smallest)
   whole, moved = run(smallest=4), run(smallest=1)
@@ -352,8 +352,8 @@ def test_repeated_failed_actions_are_counted_per_run(setup):
   in between. The heuristic, whose rotation is drawn anew, repeats nothing exactly here."""
   _, env, _, layouts, keys, heuristic = setup
   zeros = lambda obs: jnp.zeros(obs.depth.shape[0], jnp.int32)
-  stubborn = lambda obs, changed, keys, failed: agent.PixelAction(
-      primitive=zeros(obs) + agent.GRASP, rotation=zeros(obs), row=zeros(obs), col=zeros(obs))
+  stubborn = runner.Frozen(lambda obs, changed, keys, failed: agent.PixelAction(
+      primitive=zeros(obs) + agent.GRASP, rotation=zeros(obs), row=zeros(obs), col=zeros(obs)))
   runs = runner.evaluate(env, stubborn, (0, 1), layouts, keys, 10)
   logs = runner.run_logs(runs)
   attempts = env.config.env.max_failures + 1
@@ -371,7 +371,7 @@ def online(setup):
   from mvcoba_jax.learner import networks
   _, env, _, layouts, keys, _ = setup
   model = networks.build_network(env.config.network, env.config.env.num_rotations, nnx.Rngs(0))
-  policy, views = Source('mvcoba', env.config, model).policy(env.config, ONLINE)
+  policy, views = Source('mvcoba', env.config, model).actor(env.config, ONLINE)
   run = lambda l, k, cap: runner.evaluate(env, policy, views, l, k, cap)
   return policy, run, layouts, keys
 
@@ -382,7 +382,7 @@ def test_online_runs_learn_each_from_its_own_transitions(online):
   other, weights and counters alike."""
   policy, run, layouts, keys = online
   together = run(layouts, keys, 4)
-  leaves = [np.asarray(x) for x in jax.tree.leaves(together.learner.params)]
+  leaves = [np.asarray(x) for x in jax.tree.leaves(together.carry.params)]
   start = [np.asarray(x) for x in jax.tree.leaves(policy.params)]
   for i in range(2):
     assert any(not np.array_equal(x[i], s) for x, s in zip(leaves, start))
@@ -401,7 +401,7 @@ def test_a_finished_run_learns_no_more(online):
   empty = layouts.replace(in_play=layouts.in_play.at[0].set(False))
   short, long = run(empty, keys, 3), run(empty, keys, 6)
   assert [r.actions for r in runner.run_logs(short)] == [1, 3]
-  params = lambda runs, i: [np.asarray(x)[i] for x in jax.tree.leaves(runs.learner.params)]
+  params = lambda runs, i: [np.asarray(x)[i] for x in jax.tree.leaves(runs.carry.params)]
   start = [np.asarray(x) for x in jax.tree.leaves(policy.params)]
   for runs in (short, long):
     assert all(np.array_equal(a, b) for a, b in zip(params(runs, 0), start))
@@ -418,7 +418,7 @@ def test_no_repeat_takes_the_next_best_action_instead_of_a_failed_one(setup):
   q_maps = lambda obs: jnp.broadcast_to(ramp, (obs.depth.shape[0], 2, 1, r, r))
   logs = {}
   for no_repeat in (False, True):
-    policy = runner.greedy_policy(q_maps, methods.get('grasp_only'), env.config, no_repeat)
+    policy = runner.greedy_actor(q_maps, methods.get('grasp_only'), env.config, no_repeat)
     logs[no_repeat] = runner.run_logs(runner.evaluate(env, policy, (0, 1), layouts,
                                                               keys, 10))
   attempts = env.config.env.max_failures + 1

@@ -437,9 +437,9 @@ def test_a_loaded_policy_acts_as_evaluation_does():
   obs = perception.Observation(color=jnp.asarray(state['color'])[None],
                                depth=jnp.asarray(state['depth'])[None],
                                seen=jnp.asarray(state['depth'])[None] > 0)
-  greedy, _ = Source(config.network.method, config, model).policy(config, FROZEN)
+  greedy, _ = Source(config.network.method, config, model).actor(config, FROZEN)
   for changed in (True, False):
-    chosen = greedy(obs, jnp.asarray([changed]), None, None)
+    chosen, _ = greedy.act(None, obs, jnp.asarray([changed]), jnp.ones(1, bool), None, None)
     decision = loaded.act(state['color'], state['depth'], changed)
     assert (decision.primitive, decision.rotation, decision.row, decision.col) == (
         ('push', 'grasp')[int(chosen.primitive[0])], int(chosen.rotation[0]),
