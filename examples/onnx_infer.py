@@ -3,7 +3,9 @@
   python examples/onnx_infer.py --model DIR --state state.npz [--changed 0|1]
 
 DIR is the output of `mvcoba-export`. state.npz holds `color` (V, R, R, 3) RGB in
-0..1 and `depth` (V, R, R) heights in metres: the heightmaps of every camera view. `--changed`
+0..1, `depth` (V, R, R) heights in metres and `seen` (V, R, R) booleans: the heightmaps of every
+camera view (`mvcoba-viz --save-state` writes one; `seen` is needed by a policy that fills
+unseen cells). `--changed`
 says whether the previous action changed the scene (1 before the first action), which the
 change-observation rule of MV-COBA needs. Prints the action as one line of JSON.
 
@@ -22,6 +24,7 @@ import numpy as np
 import onnxruntime as ort
 
 from mvcoba_jax.deploy import DeployError, model_file
+from mvcoba_jax.deploy.heightmaps import filled
 
 
 def choose(session: ort.InferenceSession, color: np.ndarray, depth: np.ndarray,
@@ -46,14 +49,23 @@ def to_world(action: dict, depth: np.ndarray, model: dict) -> dict:
           'z': float(depth[hm['views_used'], row, col].max())}
 
 
-def load_state(path: pathlib.Path, model: dict) -> tuple[np.ndarray, np.ndarray]:
-  """(color, depth) of state.npz, checked against the model's input shapes."""
+def load_state(path: pathlib.Path, model: dict, fill_unseen: bool = False
+               ) -> tuple[np.ndarray, np.ndarray]:
+  """(color, depth) of state.npz, checked against the model's input shapes; for a policy trained
+  with `perception.fill_unseen`, each view's unseen cells filled from the others as training
+  did, which needs the state's `seen` (V, R, R) booleans."""
   with np.load(path) as data:
     color, depth = (np.asarray(data[k], np.float32) for k in ('color', 'depth'))
+    seen = np.asarray(data['seen'], bool) if 'seen' in data else None
   for name, array in (('color', color), ('depth', depth)):
     want = next(i['shape'][1:] for i in model['onnx']['inputs'] if i['name'] == name)
     if list(array.shape) != want:
       raise ValueError(f'{path}: {name} has shape {list(array.shape)}, the model wants {want}')
+  if fill_unseen:
+    if seen is None or seen.shape != depth.shape:
+      raise ValueError(f'{path}: this policy fills unseen cells and needs seen, booleans of the '
+                       f'depth\'s shape {list(depth.shape)}')
+    color, depth = filled(color, depth, seen)
   return color, depth
 
 
@@ -69,7 +81,7 @@ def main(argv=None) -> int:
     if not spec.graph_decides:
       raise DeployError(f'{args.model}: an export whose graph leaves the rule out; export again')
     model = spec.raw
-    color, depth = load_state(args.state, model)
+    color, depth = load_state(args.state, model, spec.fill_unseen)
   except (OSError, KeyError, ValueError, DeployError) as e:
     print(f'error: {e}', file=sys.stderr)
     return 2

@@ -11,11 +11,10 @@ import jax.numpy as jnp
 from flax import struct
 
 from mvcoba_jax.config import Config, PerceptionConfig
-from mvcoba_jax.deploy.heightmaps import filled
+from mvcoba_jax.deploy.heightmaps import BELOW_TABLE, HEIGHT_UNIT, changed_views, filled
 from mvcoba_jax.sim import cameras
 from mvcoba_jax.sim.geometry import world_to_pixel
 
-HEIGHT_UNIT = 1e-5  # m per step of the packed key
 GEOM_SLOTS = 1024  # geom ids must stay below this to fit the packed key
 
 
@@ -49,7 +48,7 @@ def heightmap(image: cameras.CameraImage, colors, config: Config):
   x, y, z = image.points[..., 0], image.points[..., 1], image.points[..., 2]
   row, col = world_to_pixel(x, y, res, half)
   valid = (image.hit & (row >= 0) & (row < side) & (col >= 0) & (col < side)
-           & (z >= -0.005) & (z <= top))
+           & (z >= BELOW_TABLE) & (z <= top))
   cell = jnp.where(valid, row * side + col, side * side).reshape(-1)
   height = jnp.round(jnp.clip(z, 0.0, top) / HEIGHT_UNIT).astype(jnp.int32)
   key = jnp.where(valid, height * GEOM_SLOTS + image.geom, -1).reshape(-1)
@@ -74,23 +73,10 @@ def observe(env, state) -> Observation:
   return Observation(color=color, depth=depth, seen=seen)
 
 
-def change_counts(before: Observation, after: Observation, config: PerceptionConfig):
-  """(V,) cells per view whose height changed by between change_min and change_max.
-
-  Cells missing from either heightmap count as unchanged (VPG's rule).
-  """
-  diff = jnp.abs(after.depth - before.depth)
-  changed = (diff >= config.change_min) & (diff <= config.change_max) & before.seen & after.seen
-  return jnp.sum(changed, axis=(-2, -1))
-
-
-def change_threshold(config: PerceptionConfig) -> float:
-  """tau in cells at this resolution: the same area as VPG's 300 cells at 2 mm."""
-  return config.change_area / config.heightmap_resolution ** 2
-
-
 def change_observed(before: Observation, after: Observation, grasp_success,
                     config: PerceptionConfig):
-  """Either view changed by more than tau cells, or the grasp succeeded (docs/design.md)."""
-  counts = change_counts(before, after, config)
-  return jnp.any(counts > change_threshold(config), axis=-1) | grasp_success
+  """Either view changed (`deploy.heightmaps.changed_views`, the deploy path's rule too), or the
+  grasp succeeded (docs/design.md)."""
+  views = changed_views(before.depth, before.seen, after.depth, after.seen, config.change_min,
+                        config.change_max, config.change_area, config.heightmap_resolution, jnp)
+  return jnp.any(views, axis=-1) | grasp_success

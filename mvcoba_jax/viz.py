@@ -50,12 +50,13 @@ def write_pictures(env: Tabletop, state, out: pathlib.Path, scale: int = 4) -> l
 
 def save_state(env: Tabletop, state, path: pathlib.Path) -> pathlib.Path:
   """The heightmaps of every camera view of one environment state as the ONNX example's input
-  (`examples/onnx_infer.py --state`): an npz of `color` (V, R, R, 3) RGB in 0..1 and `depth`
-  (V, R, R) heights in metres, 0 where a view saw nothing."""
+  (`examples/onnx_infer.py --state`): an npz of `color` (V, R, R, 3) RGB in 0..1, `depth`
+  (V, R, R) heights in metres, 0 where a view saw nothing (filled from the other views where the
+  config fills unseen cells) and `seen` (V, R, R), the cells each view saw."""
   obs = jax.device_get(jax.jit(lambda s: perception.observe(env, s))(state))
   path.parent.mkdir(parents=True, exist_ok=True)
   np.savez_compressed(path, color=np.asarray(obs.color, np.float32),
-                      depth=np.asarray(obs.depth, np.float32))
+                      depth=np.asarray(obs.depth, np.float32), seen=np.asarray(obs.seen, bool))
   return path
 
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from mvcoba_jax.deploy.calibration import Calibration, Camera, DeployError
 
-HEIGHT_UNIT = 1e-5  # m: heights are kept in these steps, as in training
+HEIGHT_UNIT = 1e-5  # m: heights are kept in these steps (training's `perception` reads both)
 BELOW_TABLE = -0.005  # m: points lower than this are not the table's
 
 
@@ -99,3 +99,14 @@ def filled(color, depth, seen, xp=np):
                         xp.take_along_axis(color, best[..., None], axis=0)[0], 0.0)
   return (xp.where(seen[..., None], color, fill_color[None]).astype(color.dtype),
           xp.where(seen, depth, fill_depth[None]).astype(depth.dtype))
+
+
+def changed_views(before_depth, before_seen, after_depth, after_seen, change_min: float,
+                  change_max: float, change_area: float, resolution: float, xp=np):
+  """(..., V) whether each view's heightmap (..., V, R, R) changed: more cells than
+  `change_area` / resolution^2 (VPG's 300 cells at 2 mm) changed height by between
+  `change_min` and `change_max`, cells missing from either frame counting as unchanged (VPG's
+  rule). `xp` is numpy here and jax.numpy in training (`perception.change_observed`)."""
+  diff = xp.abs(after_depth - before_depth)
+  moved = (diff >= change_min) & (diff <= change_max) & before_seen & after_seen
+  return moved.sum(axis=(-2, -1)) > change_area / resolution ** 2

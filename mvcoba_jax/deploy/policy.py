@@ -11,7 +11,7 @@ import numpy as np
 
 from mvcoba_jax.deploy import checks, model_file
 from mvcoba_jax.deploy.calibration import Calibration, DeployError
-from mvcoba_jax.deploy.heightmaps import filled
+from mvcoba_jax.deploy.heightmaps import changed_views, filled
 
 
 @dataclasses.dataclass(frozen=True)
@@ -129,6 +129,5 @@ class OnnxPolicy:
         or s1.dtype != np.bool_):
       raise DeployError(f'changed: frames of depth {d0.shape} / {d1.shape} and seen {s0.shape} / '
                         f'{s1.shape}: two frames of one shape, seen as booleans')
-    diff = np.abs(d1 - d0)
-    moved = (diff >= spec.change_min) & (diff <= spec.change_max) & s0 & s1
-    return bool((moved.sum(axis=(-2, -1)) > spec.change_area / spec.resolution_m ** 2).any())
+    return bool(changed_views(d0, s0, d1, s1, spec.change_min, spec.change_max,
+                              spec.change_area, spec.resolution_m).any())

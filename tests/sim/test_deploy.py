@@ -114,7 +114,7 @@ def test_the_exported_policy_on_camera_images_acts_as_the_jax_policy(scenes, onn
     color, depth, seen = png_heightmaps(images, b, cal, tmp_path)
     for changed in (True, False):
       want = jax_policy.act(np.asarray(observed.color[b]), np.asarray(observed.depth[b]),
-                            changed)
+                            changed, seen=np.asarray(observed.seen[b]))
       action = onnx.act(*metres, changed, cal)
       exact.append(key(action) == key(want))
       if exact[-1]:
@@ -122,7 +122,7 @@ def test_the_exported_policy_on_camera_images_acts_as_the_jax_policy(scenes, onn
         assert math.isclose(math.remainder(action.angle - want.angle - math.pi / 2, 2 * math.pi),
                             0.0, abs_tol=1e-6)
       quantised.append(key(onnx.act(color, depth, seen, changed, cal))
-                       == key(jax_policy.act(color, depth, changed)))
+                       == key(jax_policy.act(color, depth, changed, seen=seen)))
   assert sum(exact) >= 31 and sum(quantised) >= 31, (sum(exact), sum(quantised))
   with pytest.raises(DeployError, match='refused: camera cam0 sees none'):
     onnx.act(color, depth, np.stack([np.zeros_like(seen[0]), seen[1]]), True, cal)
@@ -247,7 +247,7 @@ def test_fuzzed_observations_are_refused_or_give_a_safe_action(onnx):
   outcomes = {'acted': 0, 'refused': 0}
   seen = np.ones((2, 112, 112), bool)
   for what, color, depth in fuzzed_observations():
-    for name, act in (('jax', lambda: jax_policy.act(color, depth, True)),
+    for name, act in (('jax', lambda: jax_policy.act(color, depth, True, seen=seen)),
                       ('onnx', lambda: onnx.act(color, depth, seen, True, cal))):
       try:
         a = act()
@@ -266,10 +266,12 @@ def test_fuzzed_observations_are_refused_or_give_a_safe_action(onnx):
   broken = state['depth'].copy()
   broken[:, 10:20, 10:20] = np.nan
   zeroed = np.nan_to_num(broken, nan=0.0)
-  assert jax_policy.act(state['color'], broken) == jax_policy.act(state['color'], zeroed)
-  assert jax_policy.act(state['color'], state['depth'], changed=False).primitive == 'push'
+  seen = state['seen']
+  assert (jax_policy.act(state['color'], broken, seen=seen)
+          == jax_policy.act(state['color'], zeroed, seen=seen))
+  assert jax_policy.act(state['color'], state['depth'], False, seen=seen).primitive == 'push'
   with pytest.raises(policy.PolicyError, match='changed='):
-    jax_policy.act(state['color'], state['depth'], changed='yes')
+    jax_policy.act(state['color'], state['depth'], changed='yes', seen=seen)
 
 
 def test_a_network_that_scores_nan_is_never_acted_on():
@@ -282,7 +284,7 @@ def test_a_network_that_scores_nan_is_never_acted_on():
   nnx.update(loaded.network, jax.tree.unflatten(tree, [leaves[0] * np.nan] + leaves[1:]))
   example = np.load(ROOT / 'pretrained' / 'example-state.npz')
   with pytest.raises(policy.PolicyError, match='action refused: the network scored the action nan'):
-    loaded.act(example['color'], example['depth'])
+    loaded.act(example['color'], example['depth'], seen=example['seen'])
 
 
 def test_a_failed_grasp_is_no_change_for_a_policy_trained_so(scenes, onnx):
@@ -294,13 +296,13 @@ def test_a_failed_grasp_is_no_change_for_a_policy_trained_so(scenes, onnx):
   env, _, _, observed = scenes
   before = (np.asarray(observed.depth[0]), np.asarray(observed.seen[0]))
   after = (np.asarray(observed.depth[1]), np.asarray(observed.seen[1]))  # another drop: moved
-  assert onnx.spec.failed_grasp_changes and onnx.changed(before, after)
-  assert onnx.changed(before, before, grasped=True) and not onnx.changed(before, before)
-  assert onnx.changed(before, after, grasped=False)  # the paper's rule: the frames decide
-  strict = copy.copy(onnx)
-  strict.spec = dataclasses.replace(onnx.spec, failed_grasp_changes=False)
-  assert not strict.changed(before, after, grasped=False)
-  assert strict.changed(before, after) and strict.changed(before, before, grasped=True)
+  paper = copy.copy(onnx)  # the shipped default trained with failed_grasp_changes=false
+  paper.spec = dataclasses.replace(onnx.spec, failed_grasp_changes=True)
+  assert paper.changed(before, after)
+  assert paper.changed(before, before, grasped=True) and not paper.changed(before, before)
+  assert paper.changed(before, after, grasped=False)  # the paper's rule: the frames decide
+  assert not onnx.spec.failed_grasp_changes and not onnx.changed(before, after, grasped=False)
+  assert onnx.changed(before, after) and onnx.changed(before, before, grasped=True)
   with pytest.raises(DeployError, match='two frames of one shape'):
     onnx.changed(before, (after[0][:, :50], after[1][:, :50]))
   with pytest.raises(DeployError, match='seen as booleans'):

@@ -436,18 +436,18 @@ def test_a_loaded_policy_acts_as_evaluation_does():
   state = np.load(ROOT / 'pretrained' / 'example-state.npz')
   obs = perception.Observation(color=jnp.asarray(state['color'])[None],
                                depth=jnp.asarray(state['depth'])[None],
-                               seen=jnp.asarray(state['depth'])[None] > 0)
+                               seen=jnp.asarray(state['seen'])[None])
   greedy, _ = Source(config.network.method, config, model).actor(config, FROZEN)
   for changed in (True, False):
     chosen, _ = greedy.act(None, obs, jnp.asarray([changed]), jnp.ones(1, bool), None, None)
-    decision = loaded.act(state['color'], state['depth'], changed)
+    decision = loaded.act(state['color'], state['depth'], changed, seen=state['seen'])
     assert (decision.primitive, decision.rotation, decision.row, decision.col) == (
         ('push', 'grasp')[int(chosen.primitive[0])], int(chosen.rotation[0]),
         int(chosen.row[0]), int(chosen.col[0]))
     res, half = config.perception.heightmap_resolution, config.scene.workspace_half
     assert decision.x == pytest.approx(-half + (decision.col + 0.5) * res, abs=1e-6)
     assert decision.z == pytest.approx(state['depth'][:, decision.row, decision.col].max())
-  assert loaded.act(state['color'], state['depth'], True).primitive == 'grasp'
+  assert loaded.act(state['color'], state['depth'], True, seen=state['seen']).primitive == 'grasp'
 
 
 def test_missing_work_directory_is_a_clear_error(tmp_path):

@@ -1,10 +1,12 @@
 """Two-camera ray-cast rendering, heightmaps, occlusion and change observation (tiny scene), on
 both physics backends' ray casters."""
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from mvcoba_jax import perception
+from mvcoba_jax.deploy.heightmaps import changed_views
 from mvcoba_jax.learner import networks
 from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.geometry import pixel_to_world
@@ -140,14 +142,27 @@ def test_change_observation(env, observe):
   assert bool(perception.change_observed(frame(0), frame(0), np.bool_(True), cfg))
   # Missing cells never count: the same scene with one view blanked out changes nothing.
   blind = frame(1).replace(seen=frame(1).seen.at[0].set(False), depth=frame(1).depth.at[0].set(0))
-  counts = np.asarray(perception.change_counts(frame(0), blind, cfg))
-  assert counts[0] == 0 and counts[1] > perception.change_threshold(cfg)
+  views = changed_views(frame(0).depth, frame(0).seen, blind.depth, blind.seen, cfg.change_min,
+                        cfg.change_max, cfg.change_area, cfg.heightmap_resolution, jnp)
+  assert np.asarray(views).tolist() == [False, True]
 
 
-def test_change_threshold_means_the_same_area_at_any_resolution(env):
-  cfg = env.config.perception
-  assert perception.change_threshold(cfg.__class__(heightmap_resolution=0.002)) == pytest.approx(300)
-  assert perception.change_threshold(cfg.__class__(heightmap_resolution=0.004)) == pytest.approx(75)
+@pytest.mark.parametrize('resolution, cells', [(0.002, 300), (0.004, 75)])
+def test_change_threshold_means_the_same_area_at_any_resolution(resolution, cells):
+  """VPG's 300 cells at 2 mm are 75 at 4 mm: a view changed by one cell more than that area, in
+  numpy (deploy) and jax.numpy (training) alike; heights moved beyond change_max do not count."""
+  side = 40
+  before = np.zeros((1, side, side), np.float32)
+  seen = np.ones((1, side, side), bool)
+  for xp in (np, jnp):
+    for moved, height, want in ((cells, 0.05, False), (cells + 1, 0.05, True),
+                                (cells + 1, 0.5, False)):
+      after = before.copy().reshape(-1)
+      after[:moved] = height
+      got = changed_views(xp.asarray(before), xp.asarray(seen),
+                          xp.asarray(after.reshape(1, side, side)), xp.asarray(seen),
+                          0.01, 0.3, 0.0012, resolution, xp)
+      assert np.asarray(got).tolist() == [want], (xp.__name__, moved, height)
 
 
 def test_both_backends_see_the_same_heightmaps():
