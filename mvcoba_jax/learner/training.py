@@ -13,7 +13,7 @@ import jax.numpy as jnp
 from flax import nnx, struct
 from jax.sharding import Mesh, PartitionSpec
 
-from mvcoba_jax import methods, perception
+from mvcoba_jax import perception
 from mvcoba_jax.config import Config
 from mvcoba_jax.learner import agent, networks, task
 from mvcoba_jax.learner import replay as replay_lib
@@ -68,9 +68,8 @@ class Trainer:
     self.config = config
     self.mesh = mesh if mesh is not None and mesh.devices.size > 1 else None
     self.env = Tabletop(config)
-    self.method = methods.get(config.network.method)
-    self.views = self.method.views
     model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
+    self.method, self.views = model.method, model.method.views  # the network carries its method
     self.graphdef, _ = nnx.split(model)
     self.optimizer = agent.optimizer(config.train)
 
