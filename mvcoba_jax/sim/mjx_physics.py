@@ -22,15 +22,27 @@ from mvcoba_jax.sim.physics import CAMERA_GROUPS, Parking, SimState  # noqa: E40
 from mvcoba_jax.sim.scene import Scene  # noqa: E402
 
 
+def stepped(model, data, ctrl, pin, parked, frames: tuple[int, ...], extra=lambda d: None):
+  """MJX's (or MuJoCo Warp's, through MJX) stepping of one tabletop through `ctrl` (T, nu), the
+  `parked` slots pinned after each step: the last Data, qpos after each step of `frames` (F, nq)
+  and `extra(data)` after every step, stacked (T, ...)."""
+  def body(d, c):
+    d = pin(mjx.step(model, d.replace(ctrl=c)), parked)
+    return d, (d.qpos if frames else None, extra(d))
+  data, (path, more) = jax.lax.scan(body, data, ctrl)
+  at = path[jnp.asarray(frames)] if frames else jnp.zeros((0,) + data.qpos.shape, jnp.float32)
+  return data, at, more
+
+
 class MjxPhysics:
   """MJX: the whole simulation is traced into the jitted program (the path for accelerators)."""
 
   name = 'mjx'
 
-  def __init__(self, scene: Scene):
+  def __init__(self, scene: Scene, parking: Parking):
     # This process's own device: jax.devices()[0], MJX's default, may belong to another process.
     self.model = mjx.put_model(scene.mj_model, device=jax.local_devices()[0], impl='jax')
-    self._parking = Parking(scene)
+    self._parking = parking
 
   def _data(self, sim: SimState) -> mjx.Data:
     return mjx.make_data(self.model).replace(qpos=sim.qpos, qvel=sim.qvel,
@@ -40,12 +52,7 @@ class MjxPhysics:
     """Steps one tabletop through `ctrl` (T, nu); returns the state, whether MuJoCo was content
     (MJX raises no warnings: always True; the caller checks finiteness) and qpos after each step
     of `frames` (F, nq)."""
-    pin = self._parking.pin
-    def body(d, c):
-      d = pin(mjx.step(self.model, d.replace(ctrl=c)), parked)
-      return d, d.qpos if frames else None
-    data, path = jax.lax.scan(body, self._data(sim), ctrl)
-    at = path[jnp.asarray(frames)] if frames else jnp.zeros((0,) + sim.qpos.shape, jnp.float32)
+    data, at, _ = stepped(self.model, self._data(sim), ctrl, self._parking.pin, parked, frames)
     return sim.replace(qpos=data.qpos, qvel=data.qvel), jnp.bool_(True), at
 
   def cast(self, sim: SimState, origins: np.ndarray, directions: np.ndarray):

@@ -64,18 +64,19 @@ def where_envs(mask, new, old):
       lambda a, b: jnp.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b), new, old)
 
 
-def make_backend(scene: Scene):
-  """The backend `scene.config.backend` names, for this compiled scene. Each is imported when
-  chosen: a process on the native backend never imports MJX, and one on MJX starts no C threads."""
+def make_backend(scene: Scene, parking: physics.Parking):
+  """The backend `scene.config.backend` names, for this compiled scene (the JAX backends pin
+  parked slots with the tabletop's `parking`). Each is imported when chosen: a process on the
+  native backend never imports MJX, and one on MJX starts no C threads."""
   backend = physics.resolve_backend(scene.config)
   if backend == 'native':
     from mvcoba_jax.sim.native import NativePhysics  # noqa: PLC0415
     return NativePhysics(scene)
   if backend == 'warp':
     from mvcoba_jax.sim.warp_physics import WarpPhysics  # noqa: PLC0415
-    return WarpPhysics(scene)
+    return WarpPhysics(scene, parking)
   from mvcoba_jax.sim.mjx_physics import MjxPhysics  # noqa: PLC0415
-  return MjxPhysics(scene)
+  return MjxPhysics(scene, parking)
 
 
 class Tabletop:
@@ -85,8 +86,8 @@ class Tabletop:
     """`frames`: how many snapshots of each primitive `step` returns (for videos; 0: none)."""
     self.config = config
     self.scene = build_scene(config.scene)
-    self.backend = make_backend(self.scene)
     self._parking = physics.Parking(self.scene)
+    self.backend = make_backend(self.scene, self._parking)
     self.camera_rays = cameras.world_rays(self.scene.mj_model, config.scene.cameras)
     idx = self.scene.index
     self.num_slots = len(idx.slot_shapes)

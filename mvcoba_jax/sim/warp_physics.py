@@ -28,6 +28,7 @@ warp.config.log_level = warp.LOG_WARNING
 from mujoco import mjx  # noqa: E402
 
 from mvcoba_jax.sim import cameras  # noqa: E402
+from mvcoba_jax.sim.mjx_physics import stepped  # noqa: E402
 from mvcoba_jax.sim.physics import CAMERA_GROUPS, Parking, SimState  # noqa: E402
 from mvcoba_jax.sim.scene import Scene  # noqa: E402
 
@@ -73,7 +74,7 @@ class WarpPhysics:
 
   name = 'warp'
 
-  def __init__(self, scene: Scene):
+  def __init__(self, scene: Scene, parking: Parking):
     m = scene.mj_model
     self._mj_model = m
     model = mjx.put_model(m, impl='warp')
@@ -81,7 +82,7 @@ class WarpPhysics:
     # off. Contacts and constraints that overflow are caught below and reported not ok.
     self.model = model.replace(opt=model.opt.replace(
         _impl=model.opt._impl.replace(warn_overflow=0)))  # pylint: disable=protected-access
-    self._parking = Parking(scene)
+    self._parking = parking
     self._cameras = scene.config.cameras
     self._contacts = scene.config.max_contact_points
     self._origins, self._directions = cameras.world_rays(m, self._cameras)
@@ -89,6 +90,7 @@ class WarpPhysics:
     self._contexts: dict[int, object] = {}
     self._groups = [g for g, on in enumerate(CAMERA_GROUPS) if on]
     self._cast = batched(self._cast_batch)
+    self._simulators: dict[tuple[int, ...], object] = {}  # frames -> its batched simulate
 
   def _template(self, n: int) -> mjx.Data:
     """Data of one world whose shared buffers hold `n` worlds' contacts (made once per n)."""
@@ -122,7 +124,10 @@ class WarpPhysics:
     """Steps one tabletop through `ctrl` (T, nu) (vmap it: Warp gets the batch in one program);
     returns the state, whether its contacts fitted the arena, and qpos after each step of
     `frames` (F, nq)."""
-    run = batched(functools.partial(self._simulate_batch, tuple(frames)))
+    frames = tuple(frames)
+    if frames not in self._simulators:  # one wrapper per frames, not one per call
+      self._simulators[frames] = batched(functools.partial(self._simulate_batch, frames))
+    run = self._simulators[frames]
     qpos, qvel, ok, at = run(sim.qpos, sim.qvel, sim.mocap_pos, sim.mocap_quat, parked, ctrl)
     return sim.replace(qpos=qpos, qvel=qvel), ok, at
 
@@ -130,13 +135,11 @@ class WarpPhysics:
     template = self._template(qpos.shape[0])
     pin = self._parking.pin
 
+    fill = lambda d: (d._impl.nefc, d._impl.nacon)  # pylint: disable=protected-access
+
     def world(qp, qv, mp, mq, pk, c):
-      def body(d, c_t):
-        d = pin(mjx.step(self.model, d.replace(ctrl=c_t)), pk)
-        fill = (d._impl.nefc, d._impl.nacon)  # pylint: disable=protected-access
-        return d, (d.qpos if frames else None, fill)
-      d, (path, (nefc, nacon)) = jax.lax.scan(body, self._data(template, qp, qv, mp, mq), c)
-      at = path[jnp.asarray(frames)] if frames else jnp.zeros((0,) + qp.shape, jnp.float32)
+      d, at, (nefc, nacon) = stepped(self.model, self._data(template, qp, qv, mp, mq), c, pin,
+                                     pk, frames, fill)
       return d.qpos, d.qvel, jnp.max(nefc), jnp.max(nacon), at
 
     qpos, qvel, nefc, nacon, at = jax.vmap(world)(qpos, qvel, mocap_pos, mocap_quat, parked, ctrl)
