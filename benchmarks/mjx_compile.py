@@ -1,0 +1,56 @@
+"""Where MJX's compile time goes: each part of the training step compiled alone at B tabletops
+(issue 69): the primitive's physics (`Tabletop.step`, one scan of MJX steps), a fresh drop
+(`Tabletop.reset`: the drop's settling scan), both cameras' rays and heightmaps
+(`task.observe`), on the backend asked for, each with its compile time (lower + compile) and one
+run after it. Prints one JSON object.
+
+  python benchmarks/mjx_compile.py [--config default] [--backend mjx] [--batch 8]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import jax
+
+from mvcoba_jax import methods
+from mvcoba_jax.config import resolve
+from mvcoba_jax.learner import agent, task
+from mvcoba_jax.sim.tabletop import Tabletop
+
+
+def compiled(fn, *args) -> dict:
+  """Compile seconds (lower + compile) and the seconds of one run after it."""
+  start = time.perf_counter()
+  program = jax.jit(fn).lower(*args).compile()
+  compile_s = time.perf_counter() - start
+  start = time.perf_counter()
+  out = jax.block_until_ready(program(*args))
+  return {'compile_s': round(compile_s, 2), 'run_s': round(time.perf_counter() - start, 3)}, out
+
+
+def main(argv=None) -> int:
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument('--config', default='default')
+  parser.add_argument('--backend', default='mjx')
+  parser.add_argument('--batch', type=int, default=8)
+  args = parser.parse_args(argv)
+  config = resolve(args.config, [f'scene.backend={args.backend}'])
+  env = Tabletop(config)
+  keys = jax.random.split(jax.random.PRNGKey(0), args.batch)
+  row = {'benchmark': 'mjx_compile', 'config': args.config, 'backend': args.backend,
+         'batch': args.batch, 'jax': jax.__version__, 'device': str(jax.devices()[0])}
+  row['reset'], states = compiled(jax.vmap(env.reset), keys)
+  row['observe'], obs = compiled(lambda s: task.observe(env, s), states)
+  q = jax.numpy.zeros((args.batch, 2, config.env.num_rotations) + obs.depth.shape[-2:])
+  pick = agent.greedy_actions(q, jax.numpy.ones(args.batch, bool),
+                              methods.get(config.network.method))
+  action = agent.to_world(pick, obs.depth, (0, 1), config)
+  row['step'], _ = compiled(jax.vmap(env.step), states, action)
+  print(json.dumps(row, indent=1))
+  return 0
+
+
+if __name__ == '__main__':
+  raise SystemExit(main())
