@@ -58,12 +58,12 @@ def onnx_model(config: Config, model: networks.QNetwork):
   method = model.method
   suppress = agent.suppresses(method, config)
 
-  def forward(color, depth, changed):
+  def forward(color, depth, changed):  # `agent.decide`, its rule's maps kept as an output
     q = nnx.merge(graphdef, params)(color, depth)
-    action, value = agent.decide(q, depth, changed, method, config)
+    maps = agent.rule_maps(q, depth, method, config)
+    action, value = agent.greedy(maps, changed, method)
     chosen = jnp.stack([action.primitive, action.rotation, action.row, action.col], axis=-1)
-    scores = (agent.rule_maps(q, depth, method, config),) if suppress else ()
-    return (q, *scores, chosen, value)
+    return (q, *((maps,) if suppress else ()), chosen, value)
 
   try:
     return to_onnx(forward, [jax.ShapeDtypeStruct((1, views, side, side, 3), jnp.float32),

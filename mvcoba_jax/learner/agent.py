@@ -46,21 +46,21 @@ def rule_maps(q, depth, method: Method, config: Config):
 def greedy_actions(q, changed, method: Method) -> PixelAction:
   """The rule's primitive at the argmax rotation and pixel of its maps (B, 2, K, R, R): Q maps,
   or `rule_maps` of them. `changed` is whether the previous action changed the scene (True
-  before the first action). The first maximum wins, in (rotation, row, col) order.
-
-  Written without jnp's take_along_axis, unravel_index and integer `//`, which jax2onnx cannot
-  trace, so that the export traces it into the ONNX graph (`export.onnx_model`)."""
-  return _greedy(q, changed, method)[0]
+  before the first action). The first maximum wins, in (rotation, row, col) order."""
+  return greedy(q, changed, method)[0]
 
 
 def decide(q, depth, changed, method: Method, config: Config):
   """(action, score): the greedy action on Q maps `q` (B, 2, K, R, R) of states whose heightmaps
   are `depth` (B, V, R, R), and the value its rule compared there (`rule_maps`). What a policy
-  and the exported graph decide, the same function in both."""
-  return _greedy(rule_maps(q, depth, method, config), changed, method)
+  and the online actor decide."""
+  return greedy(rule_maps(q, depth, method, config), changed, method)
 
 
-def _greedy(maps, changed, method: Method):
+def greedy(maps, changed, method: Method):
+  """(`greedy_actions`, the maps' entry at each action (B,)). Written without jnp's
+  take_along_axis, unravel_index and integer `//`, which jax2onnx cannot trace, so that the
+  export traces it into the ONNX graph (`export.onnx_model`)."""
   b, _, k, r, _ = maps.shape
   flat = maps.reshape(b, 2, k * r * r)
   primitive = method.rule.pick(changed, flat.max(axis=-1))

@@ -74,10 +74,12 @@ def factors(height, num_rotations: int, resolution: float, push_room: float = 0.
   maps = rotate_images(maps, jnp.tile(angle, b)).reshape(b, num_rotations, side, side, 2)
   ring = (_dilate(occupied, _cells(PUSH_RING[1], resolution))
           * (1.0 - _dilate(occupied, _cells(PUSH_RING[0], resolution))))
-  room = (room_ahead(side, num_rotations, resolution) >= push_room).astype(jnp.float32)
-  pushes = ring[:, None] * room  # (B, K, R, R)
-  masks = jnp.stack([pushes, jnp.broadcast_to(occupied[:, None], pushes.shape)], axis=1)
-  return jnp.clip(jnp.moveaxis(maps, -1, 1), 0.0, 1.0) * masks
+  masks = jnp.stack([ring, occupied], axis=1)[:, :, None]  # (B, 2, 1, R, R)
+  f = jnp.clip(jnp.moveaxis(maps, -1, 1), 0.0, 1.0) * masks
+  if not push_room:
+    return f
+  room = (room_ahead(side, num_rotations, resolution) >= push_room).astype(f.dtype)
+  return jnp.stack([f[:, 0] * room, f[:, 1]], axis=1)  # (PUSH, GRASP)
 
 
 def room_ahead(side: int, num_rotations: int, resolution: float):
@@ -89,9 +91,9 @@ def room_ahead(side: int, num_rotations: int, resolution: float):
   x, y = centre[None, None, :], centre[None, :, None]
 
   def along(position, step):  # distance to the border on one axis; inf when not moving on it
+    moving = jnp.abs(step) > 1e-9
     target = jnp.where(step > 0, half, -half)
-    return jnp.where(jnp.abs(step) > 1e-9, (target - position) / jnp.where(
-        jnp.abs(step) > 1e-9, step, 1.0), jnp.inf)
+    return jnp.where(moving, (target - position) / jnp.where(moving, step, 1.0), jnp.inf)
   return jnp.minimum(along(x, jnp.cos(angle)), along(y, jnp.sin(angle)))
 
 

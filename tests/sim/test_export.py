@@ -224,10 +224,10 @@ def test_a_state_saved_by_mvcoba_viz_runs_through_the_onnx_example(run, exported
 @pytest.mark.parametrize('method, overrides', [
     ('mvp', []), ('cpg', []), ('mvcoba', ['network.pad_to_diagonal=true']),
     ('mvcoba_2fcn', ['network.shared_stages=1', 'network.pad_to_diagonal=true']),
-    ('mvcoba', ['network.suppress=true']), ('grasp_only', [])])
+    ('mvcoba', ['network.suppress=true', 'network.push_room=0.15']), ('grasp_only', [])])
 def test_other_networks_export_round_trip_with_onnx_parity(method, overrides, tmp_path):
-  """MVP (four viewpoints fused in the graph), CPG and MV-COBA with `network.suppress` (an
-  output more: the suppressed scores its rule compares), a network padded to the diagonal, one
+  """MVP (four viewpoints fused in the graph), CPG and MV-COBA with `network.suppress` and
+  `push_room` (an output more: the suppressed scores its rule compares), a network padded to the diagonal, one
   that turns its features and grasp-only (every rule of methods.py) export like the others: the
   folder loads back as the same policy, and ONNX matches JAX on every output, the action its
   rule picks inside the graph included."""
