@@ -113,8 +113,8 @@ class Trainer:
         params=params, target_params=params, opt_state=self.optimizer.init(params),
         replay=replay_lib.Replay.create(self.config.train.replay_capacity, example),
         pending=replay_lib.Transition.empty(obs), pending_valid=jnp.bool_(False), key=key,
-        actions=jnp.int32(0),
-        updates=jnp.int32(0), skipped_updates=jnp.int32(0), episodes=jnp.int32(0))
+        actions=jnp.int32(0), updates=jnp.int32(0), skipped_updates=jnp.int32(0),
+        episodes=jnp.int32(0))
 
   # ---------------------------------------------------------------- learning
   def loss(self, params, target_params, batch, valid):
