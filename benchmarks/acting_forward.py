@@ -72,7 +72,7 @@ def main():
   args = parser.parse_args()
   config, model, _ = policy.load(POLICY)
   _, trained = nnx.split(model)
-  side, k = grid_size(config), config.env.num_rotations
+  side, k = grid_size(config.perception, config.scene), config.env.num_rotations
   color, depth = states(args.batch, len(config.scene.cameras), side)
   rows, reference = [], {}
   for name, overrides, dtype in VARIANTS:

@@ -29,9 +29,9 @@ from mvcoba_jax.sim.primitives import Action  # noqa: E402
 from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 
 
-def on(config, backend: str) -> Tabletop:
-  return Tabletop(dataclasses.replace(config,
-                                      scene=dataclasses.replace(config.scene, backend=backend)))
+def on(config, backend: str) -> task.Task:
+  return task.Task.build(dataclasses.replace(
+      config, scene=dataclasses.replace(config.scene, backend=backend)), (0, 1))
 
 
 def random_actions(env: Tabletop, states, key) -> Action:
@@ -56,14 +56,15 @@ def main():
   parser.add_argument('--other', choices=('mjx', 'warp'), default='mjx')
   args = parser.parse_args()
   config = resolve(None)
-  native, other = on(config, 'native'), on(config, args.other)
+  tasks = {'native': on(config, 'native'), args.other: on(config, args.other)}
+  native, other = tasks['native'].env, tasks[args.other].env
   k_reset, k_act = jax.random.split(jax.random.PRNGKey(args.seed))
   states = jax.jit(jax.vmap(native.reset))(jax.random.split(k_reset, args.batch))
   actions = random_actions(native, states, k_act)
   out = {}
   maps = {}
-  for name, env in (('native', native), (args.other, other)):
-    maps[name] = jax.jit(lambda s, env=env: task.observe(env, s))(states)
+  for name, one in tasks.items():
+    maps[name] = jax.jit(one.observe)(states)
   for name, env in (('native', native), (args.other, other)):
     end, info = jax.jit(jax.vmap(env.step))(states, actions)
     out[name] = (jax.device_get(end), jax.device_get(info),

@@ -29,11 +29,10 @@ from physics import settings  # noqa: E402
 from mvcoba_jax import runtime  # noqa: E402
 from mvcoba_jax.evaluation import runner  # noqa: E402
 from mvcoba_jax.config import resolve  # noqa: E402
-from mvcoba_jax.learner import task  # noqa: E402
+from mvcoba_jax.learner.task import Task  # noqa: E402
 from mvcoba_jax.evaluation.protocols import FROZEN  # noqa: E402
 from mvcoba_jax.evaluation.sources import trained  # noqa: E402
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
-from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 from mvcoba_jax.suites import suite_files  # noqa: E402
 from mvcoba_jax.suites import cases as suite_cases  # noqa: E402
 
@@ -41,7 +40,8 @@ from mvcoba_jax.suites import cases as suite_cases  # noqa: E402
 def step_cost(suite: str, repeats: int) -> dict:
   cases = [read_case(f) for f in suite_files([suite])[suite]]
   config = resolve(None)
-  env = Tabletop(suite_cases.suite_config(config, suite_cases.pool_for(cases)))
+  task = Task.build(suite_cases.suite_config(config, suite_cases.pool_for(cases)), (0, 1))
+  env = task.env
   n = len(cases)
   layouts = stack_layouts([case_to_layout(c, env) for c in cases])
   states, _ = jax.jit(lambda l, k: suite_cases.start(env, l, k))(
@@ -50,9 +50,9 @@ def step_cost(suite: str, repeats: int) -> dict:
 
   @jax.jit
   def action(states, key):
-    begun = task.begin(env, states)
+    begun = task.begin(states)
     chosen = policy.choose(begun.obs, begun.changed, jax.random.split(key, n), None)
-    return task.step(env, (0, 1), begun, chosen, config.train)
+    return task.step(begun, chosen)
 
   emptied = jax.jit(jax.vmap(env.emptied))(states)
   times = {'full': [], 'emptied': []}
@@ -71,17 +71,18 @@ def whole_suite(suite: str, checkpoint: str, runs: int) -> dict:
   """Wall time of a suite's evaluation kept in one batch, and moving to smaller batches."""
   cases = [read_case(f) for f in suite_files([suite])[suite]]
   source = trained(checkpoint)
-  env = Tabletop(suite_cases.suite_config(source.config, suite_cases.pool_for(cases)))
-  policy, views = source.actor(env.config, FROZEN)
-  layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
+  config = suite_cases.suite_config(source.config, suite_cases.pool_for(cases))
+  task = Task.build(config, source.views)
+  policy = source.actor(config, FROZEN)
+  layouts = stack_layouts([case_to_layout(c, task.env) for c in cases for _ in range(runs)])
   keys = jax.random.split(jax.random.PRNGKey(0), len(cases) * runs)
   n = len(cases) * runs
   row = {'suite': suite, 'checkpoint': checkpoint, 'runs': n}
   logs = {}
   for name, smallest in (('one_batch', n), ('smaller_batches', 8)):
     t = time.perf_counter()
-    logs[name] = runner.run_logs(runner.evaluate(env, policy, views, layouts, keys, 60,
-                                                         smallest=smallest))
+    logs[name] = runner.run_logs(runner.evaluate(task, policy, layouts, keys, 60,
+                                                 smallest=smallest))
     row[f'{name}_s'] = time.perf_counter() - t  # compiles included: each batch size compiles
   row['smaller_over_one'] = row['smaller_batches_s'] / row['one_batch_s']
   row['runs_that_differ'] = sum(a != b for a, b in zip(logs['one_batch'], logs['smaller_batches']))

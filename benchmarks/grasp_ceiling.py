@@ -41,7 +41,7 @@ def main():
   parser.add_argument('--yaw-deg', type=float, default=10.0, help='yaw of every shape')
   args = parser.parse_args()
   runtime.setup()
-  env = Tabletop(resolve(None))
+  env = Tabletop(resolve(None).tabletop)
   names = list(dict.fromkeys(env.scene.index.slot_shapes))  # each shape of the pool once
   rotations = env.config.env.num_rotations
   layouts, rows = [], []

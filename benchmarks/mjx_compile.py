@@ -16,8 +16,8 @@ import jax
 
 from mvcoba_jax import methods
 from mvcoba_jax.config import resolve
-from mvcoba_jax.learner import agent, task
-from mvcoba_jax.sim.tabletop import Tabletop
+from mvcoba_jax.learner import agent
+from mvcoba_jax.learner.task import Task
 
 
 def compiled(fn, *args) -> dict:
@@ -37,16 +37,17 @@ def main(argv=None) -> int:
   parser.add_argument('--batch', type=int, default=8)
   args = parser.parse_args(argv)
   config = resolve(args.config, [f'scene.backend={args.backend}'])
-  env = Tabletop(config)
+  task = Task.build(config, methods.get(config.network.method).views)
+  env = task.env
   keys = jax.random.split(jax.random.PRNGKey(0), args.batch)
   row = {'benchmark': 'mjx_compile', 'config': args.config, 'backend': args.backend,
          'batch': args.batch, 'jax': jax.__version__, 'device': str(jax.devices()[0])}
   row['reset'], states = compiled(jax.vmap(env.reset), keys)
-  row['observe'], obs = compiled(lambda s: task.observe(env, s), states)
+  row['observe'], obs = compiled(task.observe, states)
   q = jax.numpy.zeros((args.batch, 2, config.env.num_rotations) + obs.depth.shape[-2:])
   pick = agent.greedy_actions(q, jax.numpy.ones(args.batch, bool),
                               methods.get(config.network.method))
-  action = agent.to_world(pick, obs.depth, (0, 1), config)
+  action = task.to_world(pick, obs.depth)
   row['step'], _ = compiled(jax.vmap(env.step), states, action)
   print(json.dumps(row, indent=1))
   return 0

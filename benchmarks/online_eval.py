@@ -25,22 +25,23 @@ from mvcoba_jax.evaluation.metrics import case_metrics  # noqa: E402
 from mvcoba_jax.evaluation.protocols import PROTOCOLS  # noqa: E402
 from mvcoba_jax.evaluation.sources import trained  # noqa: E402
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts  # noqa: E402
-from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
+from mvcoba_jax.learner.task import Task  # noqa: E402
 from mvcoba_jax.suites import suite_files  # noqa: E402
 from mvcoba_jax.suites import cases as suite_cases  # noqa: E402
 
 
 def suite_costs(suite: str, source, runs: int) -> dict:
   cases = [read_case(f) for f in suite_files([suite])[suite]]
-  env = Tabletop(suite_cases.suite_config(source.config, suite_cases.pool_for(cases)))
-  layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
+  config = suite_cases.suite_config(source.config, suite_cases.pool_for(cases))
+  task = Task.build(config, source.views)
+  layouts = stack_layouts([case_to_layout(c, task.env) for c in cases for _ in range(runs)])
   keys = jax.random.split(jax.random.PRNGKey(0), len(cases) * runs)
   row = {'suite': suite, 'runs': len(cases) * runs}
   for protocol in ('frozen', 'online'):
-    policy, views = source.actor(env.config, PROTOCOLS[protocol])
+    policy = source.actor(config, PROTOCOLS[protocol])
     for timing in ('first_s', 'warm_s'):
       start = time.perf_counter()
-      logs = runner.run_logs(runner.evaluate(env, policy, views, layouts, keys, 60))
+      logs = runner.run_logs(runner.evaluate(task, policy, layouts, keys, 60))
       row[f'{protocol}_{timing}'] = time.perf_counter() - start
     actions = sum(log.actions for log in logs)
     row[f'{protocol}_actions'] = actions

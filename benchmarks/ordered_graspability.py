@@ -37,7 +37,7 @@ PACKED = 0.06  # an object with a neighbour centre this close is packed; others 
 def lift_table(path, base, rotations: int):
   """(case, (objects, rotations) bool: grasp at rotation k lifted the object) for one case file."""
   case = read_case(path)
-  env = Tabletop(suite_cases.suite_config(base, suite_cases.pool_for([case])))
+  env = Tabletop(suite_cases.suite_config(base, suite_cases.pool_for([case])).tabletop)
   n = len(case.objects)
   start = jax.jit(env.reset_from_case)(case_to_layout(case, env))
   batch = jax.tree.map(lambda a: jnp.broadcast_to(a, (n * rotations, *a.shape)), start)

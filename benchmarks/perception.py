@@ -23,6 +23,7 @@ import numpy as np  # noqa: E402
 
 from mvcoba_jax import perception  # noqa: E402
 from mvcoba_jax.config import resolve  # noqa: E402
+from mvcoba_jax.learner.task import Task  # noqa: E402
 from mvcoba_jax.sim.native import default_threads  # noqa: E402
 from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 
@@ -34,10 +35,11 @@ def timed(fn, *args):
 
 
 def measure(config, batch: int, repeats: int) -> dict:
-  env = Tabletop(config)
+  task = Task.build(config, (0, 1))
+  env = task.env
   keys = jax.random.split(jax.random.PRNGKey(0), batch)
   states = jax.jit(jax.vmap(lambda k: env.place(env.sample_layout(k))))(keys)
-  observe = jax.jit(jax.vmap(lambda s: perception.observe(env, s)))
+  observe = jax.jit(task.observe)
   obs, first = timed(observe, states)
   wall = float(np.median([timed(observe, states)[1] for _ in range(repeats)]))
   rays = batch * sum(c.width * c.height for c in config.scene.cameras)
@@ -50,9 +52,10 @@ def bench(preset: str, batch: int, mjx: bool, repeats: int) -> dict:
   config = resolve(preset)
   on = lambda backend: dataclasses.replace(
       config, scene=dataclasses.replace(config.scene, backend=backend))
-  row = {'preset': preset, 'batch': batch, 'grid': perception.grid_size(config),
+  row = {'preset': preset, 'batch': batch,
+         'grid': perception.grid_size(config.perception, config.scene),
          'camera_pixels': [[c.width, c.height] for c in config.scene.cameras],
-         'geoms': int(Tabletop(config).scene.mj_model.ngeom),
+         'geoms': int(Tabletop(config.tabletop).scene.mj_model.ngeom),
          'native': measure(on('native'), batch, repeats)}
   if mjx:
     row['mjx'] = measure(on('mjx'), batch, repeats)

@@ -50,7 +50,7 @@ def make_env(n: int, backend: str) -> Tabletop:
   scene = dataclasses.replace(base.scene, pool=POOLS[n], max_geom_pairs=pairs,
                               max_contact_points=points, backend=backend)
   return Tabletop(dataclasses.replace(base, scene=scene,
-                                      env=dataclasses.replace(base.env, num_objects=n)))
+                                      env=dataclasses.replace(base.env, num_objects=n)).tabletop)
 
 
 def timed(fn, *args, repeats: int):

@@ -30,7 +30,7 @@ def bench(suite: str, repeats: int, batch: int) -> dict:
   cases = [read_case(f) for f in files]
   config = suite_cases.suite_config(resolve(None), suite_cases.pool_for(cases))
   env_on = lambda backend: Tabletop(dataclasses.replace(
-      config, scene=dataclasses.replace(config.scene, backend=backend)))
+      config, scene=dataclasses.replace(config.scene, backend=backend)).tabletop)
   native = env_on('native')
   largest = max(cases, key=lambda c: len(c.objects))
   layouts = stack_layouts([case_to_layout(largest, native)] * batch)

@@ -48,8 +48,8 @@ def bench(config, batch: int, target: str, backend: str, repeats: int) -> dict:
   _, _, forward = timed(q, state.params, tabletops.obs, repeats=repeats)
   action = agent.greedy_actions(q(state.params, tabletops.obs), tabletops.changed,
                                 trainer.method)
-  world = agent.to_world(action, tabletops.obs.depth, trainer.views, config)
-  _, _, physics = timed(jax.jit(jax.vmap(trainer.env.step)), tabletops.env, world,
+  world = trainer.task.to_world(action, tabletops.obs.depth)
+  _, _, physics = timed(jax.jit(jax.vmap(trainer.task.env.step)), tabletops.env, world,
                         repeats=repeats)
   _, _, rendering = timed(jax.jit(trainer.observe), tabletops.env, repeats=repeats)
   _, _, update = timed(jax.jit(trainer.update), state, jax.random.PRNGKey(2), repeats=repeats)

@@ -54,7 +54,7 @@ def onnx_model(config: Config, model: networks.QNetwork):
     raise PolicyError(f'model.onnx needs jax2onnx ({e}); pip install -e ".[dev]"') from None
 
   graphdef, params = nnx.split(model)
-  side, views = perception.grid_size(config), len(config.scene.cameras)
+  side, views = perception.grid_size(config.perception, config.scene), len(config.scene.cameras)
   method = model.method
   suppress = agent.suppresses(method, config)
 
@@ -95,12 +95,11 @@ def action_rule(method: methods.Method, suppress: bool = False) -> dict:
           'greedy': 'exploration (epsilon-greedy) is a training matter and is not exported'}
 
 
-def describe(config: Config, params: dict[str, np.ndarray], step: int, workdir,
-             commit: str | None = None, measured: dict | None = None) -> dict:
-  """The content of model.json; `commit` names the code that trained it when known, `measured`
-  is `figures`' answer."""
-  side, k = perception.grid_size(config), config.env.num_rotations
-  method = methods.get(config.network.method)
+def describe(config: Config, method: methods.Method, params: dict[str, np.ndarray], step: int,
+             workdir, commit: str | None = None, measured: dict | None = None) -> dict:
+  """The content of model.json of a network of `method` trained in `config`; `commit` names the
+  code that trained it when known, `measured` is `figures`' answer."""
+  side, k = perception.grid_size(config.perception, config.scene), config.env.num_rotations
   suppress = agent.suppresses(method, config)
   views, num_views = method.views, len(config.scene.cameras)
   res, half = config.perception.heightmap_resolution, config.scene.workspace_half
@@ -232,8 +231,8 @@ def export(workdir, out, results=(), commit: str | None = None,
   try:
     buffer = io.BytesIO()
     np.savez(buffer, **flat)
-    model_json = json.dumps(describe(config, flat, step, workdir, commit, measured), indent=1,
-                            allow_nan=False)
+    model_json = json.dumps(describe(config, model.method, flat, step, workdir, commit,
+                                     measured), indent=1, allow_nan=False)
     folders.replace_whole(out, {'params.npz': buffer.getvalue(),
                                 'model.json': model_json.encode(),
                                 'model.onnx': proto.SerializeToString()})

@@ -10,7 +10,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 from flax import struct
 
-from mvcoba_jax.config import Config, PerceptionConfig
+from mvcoba_jax.config import PerceptionConfig, SceneConfig
 from mvcoba_jax.deploy.heightmaps import BELOW_TABLE, HEIGHT_UNIT, changed_views, filled
 from mvcoba_jax.sim import cameras
 from mvcoba_jax.sim.geometry import world_to_pixel
@@ -31,20 +31,21 @@ def color_to_uint8(color):
   return jnp.round(jnp.clip(jnp.asarray(color), 0.0, 1.0) * 255).astype(jnp.uint8)
 
 
-def grid_size(config: Config) -> int:
+def grid_size(perception: PerceptionConfig, scene: SceneConfig) -> int:
   """Heightmap side in cells; the resolution must tile the workspace exactly."""
-  side = 2 * config.scene.workspace_half / config.perception.heightmap_resolution
+  side = 2 * scene.workspace_half / perception.heightmap_resolution
   if abs(side - round(side)) > 1e-6:
-    raise ValueError(f'perception.heightmap_resolution={config.perception.heightmap_resolution} '
-                     f'does not tile the {2 * config.scene.workspace_half} m workspace')
+    raise ValueError(f'perception.heightmap_resolution={perception.heightmap_resolution} '
+                     f'does not tile the {2 * scene.workspace_half} m workspace')
   return int(round(side))
 
 
-def heightmap(image: cameras.CameraImage, colors, config: Config):
+def heightmap(image: cameras.CameraImage, colors, perception: PerceptionConfig,
+              scene: SceneConfig):
   """(R, R, 3) colour, (R, R) depth heightmap and (R, R) seen mask of one camera's picture."""
-  side = grid_size(config)
-  half, top = config.scene.workspace_half, config.scene.workspace_top
-  res = config.perception.heightmap_resolution
+  side = grid_size(perception, scene)
+  half, top = scene.workspace_half, scene.workspace_top
+  res = perception.heightmap_resolution
   x, y, z = image.points[..., 0], image.points[..., 1], image.points[..., 2]
   row, col = world_to_pixel(x, y, res, half)
   valid = (image.hit & (row >= 0) & (row < side) & (col >= 0) & (col < side)
@@ -60,15 +61,17 @@ def heightmap(image: cameras.CameraImage, colors, config: Config):
   return color, depth, seen
 
 
-def observe(env, state) -> Observation:
-  """Renders every camera of one environment and projects each into its heightmaps."""
+def observe(env, state, config: PerceptionConfig) -> Observation:
+  """Renders every camera of one environment (a `Tabletop`) and projects each into its
+  heightmaps as `config` says."""
   if env.scene.mj_model.ngeom > GEOM_SLOTS:
     raise ValueError(f'the scene has {env.scene.mj_model.ngeom} geoms; heightmaps pack geom ids '
                      f'below {GEOM_SLOTS}')
   colors = cameras.geom_colors(env, state)
-  maps = [heightmap(image, colors, env.config) for image in cameras.render(env, state)]
+  maps = [heightmap(image, colors, config, env.config.scene)
+          for image in cameras.render(env, state)]
   color, depth, seen = (jnp.stack(parts) for parts in zip(*maps))
-  if env.config.perception.fill_unseen:
+  if config.fill_unseen:
     color, depth = filled(color, depth, seen, jnp)
   return Observation(color=color, depth=depth, seen=seen)
 

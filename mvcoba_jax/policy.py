@@ -80,7 +80,7 @@ class Policy(typing.NamedTuple):
                         'scene)')
     try:
       color, depth = checks.observation(color, depth, len(config.scene.cameras),
-                                        perception.grid_size(config), top)
+                                        perception.grid_size(config.perception, config.scene), top)
       if config.perception.fill_unseen:
         color, depth = filled(color, depth, checks.seen(seen, depth))
     except checks.Refused as e:
@@ -88,7 +88,8 @@ class Policy(typing.NamedTuple):
     depth = jnp.asarray(depth)[None]
     pick, score = agent.decide(jnp.asarray(self.q_maps(color, depth[0]))[None], depth,
                                jnp.asarray([bool(changed)]), method, config)
-    world = agent.to_world(pick, depth, method.views, config)
+    world = agent.to_world(pick, depth, method.views, config.perception.heightmap_resolution,
+                           half)
     k = int(pick.rotation[0])
     decision = Decision(primitive=('push', 'grasp')[int(pick.primitive[0])], rotation=k,
                         angle=float(rotation_angle(k, config.env.num_rotations)),

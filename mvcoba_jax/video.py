@@ -1,7 +1,7 @@
 """Run videos: the scene from a camera that sees the gripper, a few frames per primitive, the
 chosen action and its outcome written on them; one MP4 per evaluation run (OpenCV's writer).
 
-The frames are the qpos snapshots an evaluation records with `Tabletop(config, frames=F)`
+The frames are the qpos snapshots an evaluation records with `Task.build(config, views, frames=F)`
 (`evaluation.Trace.frames`). They are drawn here, on the host, by casting one ray per pixel with
 MuJoCo (`mujoco.batch`), every geom group included, and shading each hit by the surface's normal:
 no OpenGL, so it works on any CPU.
@@ -15,6 +15,7 @@ import mujoco
 import numpy as np
 from mujoco import batch as mjbatch
 
+from mvcoba_jax.learner.task import Task
 from mvcoba_jax.sim import cameras
 from mvcoba_jax.sim.config import CameraConfig
 from mvcoba_jax.sim.geometry import pixel_to_world
@@ -80,12 +81,13 @@ def _caption(image, lines) -> None:
                 1, cv2.LINE_AA)
 
 
-def write_run_videos(trace, names: list[str], out: pathlib.Path, env,
+def write_run_videos(trace, names: list[str], out: pathlib.Path, task: Task,
                      cam: CameraConfig = CAMERA) -> list[pathlib.Path]:
   """An MP4 per run (`names[i]` names run i's file) of a recorded evaluation's trace (host
   arrays): every action the run took, `Trace.frames` pictures each."""
   out.mkdir(parents=True, exist_ok=True)
-  res, half = env.config.perception.heightmap_resolution, env.config.scene.workspace_half
+  env = task.env
+  res, half = task.perception.heightmap_resolution, env.config.scene.workspace_half
   k = env.config.env.num_rotations
   paths = []
   for i, name in enumerate(names):

@@ -7,13 +7,12 @@ import cv2
 import jax
 import numpy as np
 
-from mvcoba_jax import config as config_lib
 from mvcoba_jax import perception
 from mvcoba_jax.sim import cameras
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.sim.primitives import GRASP
 from mvcoba_jax.sim.scene import MAX_OPENING
-from mvcoba_jax.sim.tabletop import Tabletop
+from mvcoba_jax.learner.task import Task
 
 # Action markers (BGR): a push, a grasp that lifted an object, a grasp that did not.
 PUSH_COLOR, GRASP_OK_COLOR, GRASP_FAILED_COLOR = (255, 160, 0), (0, 200, 0), (0, 0, 230)
@@ -28,11 +27,11 @@ def _depth_png(depth: np.ndarray, top: float) -> np.ndarray:
   return cv2.applyColorMap(gray, cv2.COLORMAP_VIRIDIS)
 
 
-def write_pictures(env: Tabletop, state, out: pathlib.Path, scale: int = 4) -> list[pathlib.Path]:
+def write_pictures(task: Task, state, out: pathlib.Path, scale: int = 4) -> list[pathlib.Path]:
   """PNG files of every camera image and heightmap of one environment state."""
   out.mkdir(parents=True, exist_ok=True)
-  images = jax.jit(lambda s: cameras.render(env, s))(state)
-  obs = jax.jit(lambda s: perception.observe(env, s))(state)
+  images = jax.jit(lambda s: cameras.render(task.env, s))(state)
+  obs = _observed(task, state)
   pictures = {}
   for c, image in enumerate(images):
     far = float(np.asarray(image.depth).max()) or 1.0
@@ -48,29 +47,34 @@ def write_pictures(env: Tabletop, state, out: pathlib.Path, scale: int = 4) -> l
   return paths
 
 
-def save_state(env: Tabletop, state, path: pathlib.Path) -> pathlib.Path:
+def _observed(task: Task, state) -> perception.Observation:
+  """The heightmaps of one environment state, on the host."""
+  return jax.device_get(jax.jit(lambda s: perception.observe(task.env, s, task.perception))(state))
+
+
+def save_state(task: Task, state, path: pathlib.Path) -> pathlib.Path:
   """The heightmaps of every camera view of one environment state as the ONNX example's input
   (`examples/onnx_infer.py --state`): an npz of `color` (V, R, R, 3) RGB in 0..1, `depth`
   (V, R, R) heights in metres, 0 where a view saw nothing (filled from the other views where the
   config fills unseen cells) and `seen` (V, R, R), the cells each view saw."""
-  obs = jax.device_get(jax.jit(lambda s: perception.observe(env, s))(state))
+  obs = _observed(task, state)
   path.parent.mkdir(parents=True, exist_ok=True)
   np.savez_compressed(path, color=np.asarray(obs.color, np.float32),
                       depth=np.asarray(obs.depth, np.float32), seen=np.asarray(obs.seen, bool))
   return path
 
 
-def run_strip(trace, run: int, config: config_lib.Config, scale: int = 3) -> np.ndarray:
+def run_strip(trace, run: int, task: Task, scale: int = 3) -> np.ndarray:
   """One run as a left-to-right strip of its steps, each the views' colour heightmaps stacked
   top to bottom with the action drawn on them: a push as an arrow along its direction, a grasp
   as a bar across the fingers' closing line (green if it lifted an object, red if not)."""
-  cell = config.perception.heightmap_resolution
-  push_length, finger_span = config.env.push_length / cell * scale, MAX_OPENING / cell * scale
+  cell, env = task.perception.heightmap_resolution, task.env.config.env
+  push_length, finger_span = env.push_length / cell * scale, MAX_OPENING / cell * scale
   frames = []
   for t in np.flatnonzero(np.asarray(trace.active[run])):
     views = [cv2.resize(np.ascontiguousarray(v[..., ::-1]), None, fx=scale, fy=scale,
                         interpolation=cv2.INTER_NEAREST) for v in np.asarray(trace.color[run, t])]
-    yaw = float(rotation_angle(int(trace.rotation[run, t]), config.env.num_rotations))
+    yaw = float(rotation_angle(int(trace.rotation[run, t]), env.num_rotations))
     centre = np.array([trace.col[run, t] + 0.5, trace.row[run, t] + 0.5]) * scale
     is_grasp = int(trace.primitive[run, t]) == GRASP
     if is_grasp:  # the fingers close along (-sin, cos)
@@ -89,12 +93,11 @@ def run_strip(trace, run: int, config: config_lib.Config, scale: int = 3) -> np.
   return np.concatenate(frames[:-1], axis=1) if frames else np.zeros((1, 1, 3), np.uint8)
 
 
-def write_run_strips(trace, names: list[str], out: pathlib.Path,
-                     config: config_lib.Config) -> list[pathlib.Path]:
+def write_run_strips(trace, names: list[str], out: pathlib.Path, task: Task) -> list[pathlib.Path]:
   """A PNG strip per run (`names[i]` names run i's file)."""
   out.mkdir(parents=True, exist_ok=True)
   paths = []
   for i, name in enumerate(names):
     paths.append(out / f'{name}.png')
-    cv2.imwrite(str(paths[-1]), run_strip(trace, i, config))
+    cv2.imwrite(str(paths[-1]), run_strip(trace, i, task))
   return paths

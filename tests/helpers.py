@@ -3,7 +3,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from mvcoba_jax.config import override, resolve
+from mvcoba_jax import methods
+from mvcoba_jax.config import Config, override, resolve
+from mvcoba_jax.learner.task import Task
 from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.primitives import Action
 from mvcoba_jax.sim.scene import park_position
@@ -12,12 +14,23 @@ from mvcoba_jax.sim.tabletop import Layout, Tabletop
 BACKENDS = ('native', 'mjx', 'warp')  # physics tests run on each; the rest on the default (auto)
 
 
-def make_env(preset: str, backend: str = 'auto', *overrides: str) -> Tabletop:
-  """The environment of `preset` on `backend`, with `key=value` overrides."""
+def make_config(preset: str, backend: str = 'auto', *overrides: str) -> Config:
+  """The config of `preset` on `backend`, with `key=value` overrides."""
   config = override(resolve(preset), f'scene.backend={backend}')
   for assignment in overrides:
     config = override(config, assignment)
-  return Tabletop(config)
+  return config
+
+
+def make_env(preset: str, backend: str = 'auto', *overrides: str) -> Tabletop:
+  """The environment of `preset` on `backend`, with `key=value` overrides."""
+  return Tabletop(make_config(preset, backend, *overrides).tabletop)
+
+
+def make_task(preset: str, backend: str = 'auto', *overrides: str) -> Task:
+  """The task of `preset` on `backend`, with `key=value` overrides, through its method's views."""
+  config = make_config(preset, backend, *overrides)
+  return Task.build(config, methods.get(config.network.method).views)
 
 
 def layout(env, objects):

@@ -51,7 +51,7 @@ def main(argv=None) -> int:
   except config_lib.ConfigError as e:
     parser.error(str(e))
   runtime.setup()
-  env = Tabletop(config)
+  env = Tabletop(config.tabletop)
   b = config.num_envs
   print(f'{b} tabletops, {config.env.num_objects} objects each, pool of {env.num_slots} slots. '
         f'Compiling reset and step on the {env.backend.name} backend (cached after the first '

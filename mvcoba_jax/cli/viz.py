@@ -16,9 +16,9 @@ import sys
 import jax
 
 from mvcoba_jax import config as config_lib
-from mvcoba_jax import folders, runtime
+from mvcoba_jax import folders, methods, runtime
+from mvcoba_jax.learner.task import Task
 from mvcoba_jax.sim.scenarios import ScenarioError, case_to_layout, read_case
-from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites.cases import pool_for, suite_config
 from mvcoba_jax.viz import save_state, write_pictures
 
@@ -49,16 +49,19 @@ def main(argv=None) -> int:
     config = config_lib.from_arguments(args)
     scene = config.scene
     case = read_case(args.case, scene.workspace_half, scene.workspace_top, args.blocks)
-    env = Tabletop(suite_config(config, pool_for([case])))  # the slots the case needs
-    layout = case_to_layout(case, env)
+    # the slots the case needs
+    task = Task.build(suite_config(config, pool_for([case])),
+                      methods.get(config.network.method).views)
+    layout = case_to_layout(case, task.env)
   except (config_lib.ConfigError, ScenarioError) as e:
     parser.error(str(e))
   runtime.setup()
+  env = task.env
   state = (jax.jit(env.reset_from_case) if args.settle else jax.jit(env.place))(layout)
-  for path in write_pictures(env, state, pathlib.Path(args.out)):
+  for path in write_pictures(task, state, pathlib.Path(args.out)):
     print(path)
   if args.save_state:
-    print(save_state(env, state, args.save_state))
+    print(save_state(task, state, args.save_state))
   return 0
 
 

@@ -11,13 +11,14 @@ from mvcoba_jax.config.schema import (ACTIVATION_LIMIT_BYTES, DENSENET_GROWTH, F
                                       MAX_ACTIONS_LIMIT, PHASE_LIMIT_S, REPLAY_LIMIT_BYTES,
                                       TARGETS, TRUNKS, Between, CameraConfig, Config,
                                       ConfigError, EnvConfig, Error, NetworkConfig,
-                                      PerceptionConfig, SceneConfig, TrainConfig, check)
+                                      PerceptionConfig, SceneConfig, TabletopConfig,
+                                      TrainConfig, check)
 from mvcoba_jax.config.validation import validate
 
 __all__ = ['ACTIVATION_LIMIT_BYTES', 'Between', 'CameraConfig', 'Config', 'ConfigError',
            'DENSENET_GROWTH', 'EnvConfig', 'Error', 'FIXED_BY_TRAINING', 'FUTURE_MAX', 'LEGACY',
            'MAX_ACTIONS_LIMIT', 'NetworkConfig', 'PHASE_LIMIT_S', 'PRESETS', 'PerceptionConfig',
            'REPLAY_LIMIT_BYTES', 'RETIRED', 'RUNTIME_FIELDS', 'SceneConfig', 'TARGETS', 'TRUNKS',
-           'TrainConfig', 'add_arguments', 'check', 'defaulted', 'evaluated', 'flat',
-           'from_arguments', 'from_dict', 'load_preset', 'override', 'resolve', 'to_dict',
+           'TabletopConfig', 'TrainConfig', 'add_arguments', 'check', 'defaulted', 'evaluated',
+           'flat', 'from_arguments', 'from_dict', 'load_preset', 'override', 'resolve', 'to_dict',
            'trained_as', 'validate']

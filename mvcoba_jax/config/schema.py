@@ -12,11 +12,12 @@ from mvcoba_jax.sim.config import (
   EnvConfig,
   Error,
   SceneConfig,
+  TabletopConfig,
   check,
 )
 
 __all__ = ['CameraConfig', 'Config', 'ConfigError', 'EnvConfig', 'Error', 'NetworkConfig',
-           'PerceptionConfig', 'SceneConfig', 'TrainConfig']
+           'PerceptionConfig', 'SceneConfig', 'TabletopConfig', 'TrainConfig']
 
 
 TRUNKS = ('small', 'densenet121')
@@ -162,6 +163,11 @@ class Config:
 
   def __post_init__(self):
     check(self, '', {'num_envs': Between(1, 65536), 'seed': Between(0, 2 ** 31 - 1)})
+
+  @property
+  def tabletop(self) -> TabletopConfig:
+    """The scene and the episode: what `Tabletop` is built from."""
+    return TabletopConfig(scene=self.scene, env=self.env)
 
   @property
   def updates_per_step(self) -> int:

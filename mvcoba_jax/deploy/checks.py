@@ -16,7 +16,8 @@ import math
 
 import numpy as np
 
-BELOW_TABLE = -0.005  # m: heights lower than this are not the table's (as heightmaps drop them)
+from mvcoba_jax.deploy.heightmaps import BELOW_TABLE  # heights lower are not the table's
+
 COLOR_SCALES = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}
 
 

@@ -22,10 +22,11 @@ from flax import nnx, struct
 from mvcoba_jax import methods, perception
 from mvcoba_jax.config import Config
 from mvcoba_jax.evaluation.metrics import RunLog
-from mvcoba_jax.learner import agent, networks, task
+from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.learner import replay as replay_lib
 from mvcoba_jax.sim.geometry import pixel_to_world
-from mvcoba_jax.sim.tabletop import Layout, Tabletop, where_envs
+from mvcoba_jax.learner.task import Outcome, State, Task
+from mvcoba_jax.sim.tabletop import Layout, where_envs
 from mvcoba_jax.suites.cases import start
 
 class Actor:
@@ -187,19 +188,19 @@ class Online(Actor):
 class Batch:
   """The evaluation loop's carry: the runs in the batch (B,), each run's task and counts, and
   the lockstep action count."""
-  task: task.State
+  state: State
   runs: Runs
   keys: jnp.ndarray  # (B, 2)
   t: jnp.ndarray  # int32: lockstep actions taken
   carry: Any = None  # the actor's per-run state (`Actor.init`)
 
 
-@functools.partial(jax.jit, static_argnames=('env', 'views', 'max_actions', 'record'))
-def begin(env: Tabletop, views: tuple[int, ...], layouts: Layout, keys, max_actions: int,
-          record: bool) -> Batch:
+@functools.partial(jax.jit, static_argnames=('task', 'max_actions', 'record'))
+def begin(task: Task, layouts: Layout, keys, max_actions: int, record: bool) -> Batch:
   """Every run settled at its start, counters at zero (and an empty trace with `record`)."""
+  env = task.env
   states, k_loop = start(env, layouts, keys)
-  begun = task.begin(env, states)
+  begun = task.begin(states)
   obs = begun.obs
   n = layouts.in_play.shape[0]
   zeros = jnp.zeros(n, jnp.int32)
@@ -211,12 +212,12 @@ def begin(env: Tabletop, views: tuple[int, ...], layouts: Layout, keys, max_acti
   if record:
     nothing = agent.PixelAction(zeros, zeros, zeros, zeros)
     shapes = jax.eval_shape(lambda s, a: jax.vmap(env.step)(s, a)[1], states,
-                            agent.to_world(nothing, obs.depth, views, env.config))
+                            task.to_world(nothing, obs.depth))
     step = _snapshot(env, obs, states, nothing,
                      jax.tree.map(lambda x: jnp.zeros(x.shape, x.dtype), shapes), runs.finished)
     runs = runs.replace(trace=jax.tree.map(
         lambda x: jnp.zeros((n, max_actions) + x.shape[1:], x.dtype), step))
-  return Batch(task=begun, runs=runs, keys=k_loop, t=jnp.int32(0))
+  return Batch(state=begun, runs=runs, keys=k_loop, t=jnp.int32(0))
 
 
 def _snapshot(env, obs, states, action: agent.PixelAction, info, active) -> Trace:
@@ -230,10 +231,10 @@ def _snapshot(env, obs, states, action: agent.PixelAction, info, active) -> Trac
                mocap_pos=states.sim.mocap_pos, mocap_quat=states.sim.mocap_quat)
 
 
-@functools.partial(jax.jit, static_argnames=('env', 'actor', 'views', 'max_actions', 'record',
+@functools.partial(jax.jit, static_argnames=('task', 'actor', 'max_actions', 'record',
                                              'progress'))
-def advance(env: Tabletop, actor: Actor, views: tuple[int, ...], batch: Batch, max_actions: int,
-            record: bool, progress, until, retired) -> Batch:
+def advance(task: Task, actor: Actor, batch: Batch, max_actions: int, record: bool, progress,
+            until, retired) -> Batch:
   """Lockstep actions until every run of the batch has finished, the action cap, or no more than
   `until` runs still going; `retired`: the finished runs outside this batch (for `progress`)."""
   def going(batch: Batch):
@@ -241,11 +242,11 @@ def advance(env: Tabletop, actor: Actor, views: tuple[int, ...], batch: Batch, m
     return (still > 0) & (still > until) & (batch.t < max_actions)
 
   return jax.lax.while_loop(
-      going, lambda b: lockstep(env, actor, views, b, record, progress, retired), batch)
+      going, lambda b: lockstep(task, actor, b, record, progress, retired), batch)
 
 
-def advance_on_host(env: Tabletop, actor: Actor, views: tuple[int, ...], batch: Batch,
-                    max_actions: int, record: bool, progress, until, retired) -> Batch:
+def advance_on_host(task: Task, actor: Actor, batch: Batch, max_actions: int, record: bool,
+                    progress, until, retired) -> Batch:
   """`advance` with its loop on the host, one compiled lockstep action per call: what a learning
   actor runs on a CPU, where XLA runs an SGD update inside a loop body several times slower than
   outside one (docs/design.md; training writes its steps out for the same reason)."""
@@ -253,22 +254,21 @@ def advance_on_host(env: Tabletop, actor: Actor, views: tuple[int, ...], batch: 
     still = int(jnp.sum(~batch.runs.finished))
     if not (still > 0 and still > until and int(batch.t) < max_actions):
       return batch
-    batch = _lockstep(env, actor, views, batch, record, progress, retired)
+    batch = _lockstep(task, actor, batch, record, progress, retired)
 
 
-def lockstep(env: Tabletop, actor: Actor, views: tuple[int, ...], batch: Batch, record: bool,
-             progress, retired) -> Batch:
+def lockstep(task: Task, actor: Actor, batch: Batch, record: bool, progress,
+             retired) -> Batch:
   """One lockstep action of every run of the batch; `retired`: the finished runs outside this
   batch (for `progress`)."""
-  before, runs = batch.task, batch.runs
+  before, runs = batch.state, batch.runs
   obs = before.obs
   keys, k_act = jax.vmap(jax.random.split, out_axes=1)(batch.keys)
   active = ~runs.finished
   action, carry = actor.act(batch.carry, obs, before.changed, active, k_act,
                             (runs.failed, runs.tried))
-  after, out = task.step(env, views, before, action, env.config.train)
-  carry = actor.observe(carry, task.transition(obs, after.obs, action, out, env.config.train),
-                        out.done, active)
+  after, out = task.step(before, action)
+  carry = actor.observe(carry, task.transition(obs, after.obs, action, out), out.done, active)
   info = out.info
   count = lambda total, x: total + jnp.where(active, x, 0).astype(jnp.int32)
   is_grasp = action.primitive == agent.GRASP
@@ -283,20 +283,20 @@ def lockstep(env: Tabletop, actor: Actor, views: tuple[int, ...], batch: Batch, 
   if record:
     runs = runs.replace(trace=jax.tree.map(
         lambda buf, x: buf.at[:, batch.t].set(x), runs.trace,
-        _snapshot(env, obs, before.env, action, info, active)))
+        _snapshot(task.env, obs, before.env, action, info, active)))
   if progress is not None:
     jax.debug.callback(progress, batch.t + 1, retired + jnp.sum(runs.finished))
   # A finished run steps on with its table emptied, so the batch waits for the others at
   # a fraction of the cost; nothing it does is counted.
   after = where_envs(active, after, before).replace(
-      env=where_envs(runs.finished, jax.vmap(env.emptied)(after.env), after.env))
-  return Batch(task=after, runs=runs, keys=keys, t=batch.t + 1, carry=carry)
+      env=where_envs(runs.finished, jax.vmap(task.env.emptied)(after.env), after.env))
+  return Batch(state=after, runs=runs, keys=keys, t=batch.t + 1, carry=carry)
 
 
-_lockstep = jax.jit(lockstep, static_argnames=('env', 'actor', 'views', 'record', 'progress'))
+_lockstep = jax.jit(lockstep, static_argnames=('task', 'actor', 'record', 'progress'))
 
 
-def _repeats(runs: Runs, action: agent.PixelAction, out: task.Outcome, active):
+def _repeats(runs: Runs, action: agent.PixelAction, out: Outcome, active):
   """The failed actions since the scene last changed, with this one's outcome, and whether
   this action repeated one of them exactly (B,). A run ends after `env.max_failures` + 1 failed
   actions in a row, so the list never holds more."""
@@ -314,8 +314,8 @@ def _repeats(runs: Runs, action: agent.PixelAction, out: task.Outcome, active):
   return failed, tried, repeated & active
 
 
-def evaluate(env: Tabletop, actor: Actor, views: tuple[int, ...], layouts: Layout, keys,
-             max_actions: int, record: bool = False,
+def evaluate(task: Task, actor: Actor, layouts: Layout, keys, max_actions: int,
+             record: bool = False,
              progress: Callable[[jnp.ndarray, jnp.ndarray], None] | None = None,
              smallest: int = 8) -> Runs:
   """Plays `actor` from each layout (N,) with its key (N,); returns the counters. An `Online`
@@ -330,14 +330,14 @@ def evaluate(env: Tabletop, actor: Actor, views: tuple[int, ...], layouts: Layou
   with N x max_actions x views x R^2 x 3 bytes). `progress(actions_done, runs_finished)` is
   called on the host after every lockstep action: a large suite can take an hour on a CPU.
   """
-  batch = begin(env, views, layouts, keys, max_actions, record)
-  batch = batch.replace(carry=jax.jit(actor.init)(batch.task.obs))
+  batch = begin(task, layouts, keys, max_actions, record)
+  batch = batch.replace(carry=jax.jit(actor.init)(batch.state.obs))
   n = layouts.in_play.shape[0]
   size, members, runs = n, jnp.arange(n), batch.runs.replace(carry=batch.carry)
   loop = advance_on_host if actor.learns and jax.default_backend() == 'cpu' else advance
   while True:
     until = size // 2 if size // 2 >= smallest else -1
-    batch = loop(env, actor, views, batch, max_actions, record, progress, until, n - size)
+    batch = loop(task, actor, batch, max_actions, record, progress, until, n - size)
     runs = jax.tree.map(lambda whole, part: whole.at[members].set(part), runs,
                         batch.runs.replace(carry=batch.carry))
     going = int(jnp.sum(~batch.runs.finished))
@@ -359,20 +359,20 @@ def run_logs(runs: Runs) -> list[RunLog]:
                  repeated_failures=r.repeated_failures[i]) for i in range(len(r.actions))]
 
 
-def losses(trace: Trace, names: list[str], config: Config) -> list[dict]:
+def losses(trace: Trace, names: list[str], task: Task) -> list[dict]:
   """Every object that left the workspace in a recorded evaluation, with the action it left in.
 
   Host side, from `Runs.trace`; `names[i]` names run i. Where the object was when the action
   began, how far from the gripper's target and from the workspace's border, tells a grasp that
   drops its object from a push that shoves a neighbour over the edge.
   """
-  half = config.scene.workspace_half
+  half = task.env.config.scene.workspace_half
   trace = jax.device_get(trace)
   left = np.asarray(trace.left_workspace) & np.asarray(trace.active)[..., None]
   records = []
   for run, t, slot in zip(*np.nonzero(left)):
     x, y = pixel_to_world(trace.row[run, t], trace.col[run, t],
-                          config.perception.heightmap_resolution, half)
+                          task.perception.heightmap_resolution, half)
     xyz = np.asarray(trace.object_xyz[run, t, slot], float)
     records.append({
         'run': names[run], 'action': int(t), 'slot': int(slot),

@@ -20,7 +20,7 @@ from mvcoba_jax.evaluation import sources as sources_lib
 from mvcoba_jax.evaluation.protocols import FROZEN, PROTOCOLS, Protocol
 from mvcoba_jax.policy import PolicyError
 from mvcoba_jax.sim.scenarios import MAX_FIT_BOUND, ScenarioError, case_to_layout, stack_layouts
-from mvcoba_jax.sim.tabletop import Tabletop
+from mvcoba_jax.learner.task import Task
 from mvcoba_jax.suites import cases as suite_cases
 from mvcoba_jax.suites import loading, suite_files
 
@@ -215,11 +215,11 @@ def _row(spec: EvalSpec, suite: str, cases, label: str, source: sources_lib.Sour
          base) -> dict:
   """One policy's row of one suite: its runs, their pictures when asked, the scored counts."""
   runs, say = spec.runs, spec.say
-  env = Tabletop(suite_cases.suite_config(source.config if source.trained else base,
-                                           suite_cases.pool_for(cases)),
-                 frames=video.FRAMES_PER_PRIMITIVE if spec.video else 0)
-  actor, views = source.actor(env.config, spec.protocol)
-  layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
+  config = suite_cases.suite_config(source.config if source.trained else base,
+                                    suite_cases.pool_for(cases))
+  task = Task.build(config, source.views, frames=video.FRAMES_PER_PRIMITIVE if spec.video else 0)
+  actor = source.actor(config, spec.protocol)
+  layouts = stack_layouts([case_to_layout(c, task.env) for c in cases for _ in range(runs)])
   keys = jax.random.split(jax.random.PRNGKey(spec.seed), len(cases) * runs)
   say(f'{suite}: {label}, {len(cases)} cases x {runs} runs, up to {spec.max_actions} actions '
       'each; compiling and running...', flush=True)
@@ -229,7 +229,7 @@ def _row(spec: EvalSpec, suite: str, cases, label: str, source: sources_lib.Sour
     def progress(done, finished, bar=bar, n=len(layouts.in_play)):
       bar.set_postfix_str(f'{int(finished)}/{n} runs finished', refresh=False)
       bar.update(int(done) - bar.n)
-    result = runner.evaluate(env, actor, views, layouts, keys, spec.max_actions,
+    result = runner.evaluate(task, actor, layouts, keys, spec.max_actions,
                              record=spec.save_visuals or spec.video, progress=progress)
     logs = runner.run_logs(result)
   names = [c.name for c in cases]
@@ -237,12 +237,12 @@ def _row(spec: EvalSpec, suite: str, cases, label: str, source: sources_lib.Sour
   where = pathlib.Path(pathlib.Path(suite).name) / label.replace(':', '_')
   if spec.video:
     paths = video.write_run_videos(jax.device_get(result.trace), run_names,
-                                   spec.out / 'videos' / where, env)
+                                   spec.out / 'videos' / where, task)
     say(f'  {len(paths)} videos in {spec.out / "videos" / where}', flush=True)
   if spec.save_visuals:
     folder = spec.out / 'visuals' / where
-    viz.write_run_strips(jax.device_get(result.trace), run_names, folder, env.config)
-    lost = runner.losses(result.trace, run_names, env.config)
+    viz.write_run_strips(jax.device_get(result.trace), run_names, folder, task)
+    lost = runner.losses(result.trace, run_names, task)
     (folder / 'losses.json').write_text(json.dumps(lost, indent=1))
     say(f'  visuals in {folder}; {report_lib.loss_summary(lost)}', flush=True)
   by_case = {name: logs[i * runs:(i + 1) * runs] for i, name in enumerate(names)}

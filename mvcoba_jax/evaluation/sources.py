@@ -32,23 +32,28 @@ class Source:
   def trained(self) -> bool:
     return self.network is not None
 
+  @property
+  def views(self) -> tuple[int, ...]:
+    """The views whose heights place its actions: its method's (a baseline reads both)."""
+    return self.network.method.views if self.trained else (0, 1)
+
   def settings(self) -> dict:
     """What a results row records of its policy."""
     return {'checkpoint': self.path, 'step': self.step,
             'params': policy_lib.fingerprint(self.network) if self.trained else None,
             'training': self.training, 'training_seed': self.training_seed}
 
-  def actor(self, config: Config, protocol: Protocol):
-    """(actor, views) playing this source's runs in `config` under `protocol` (a baseline is
+  def actor(self, config: Config, protocol: Protocol) -> runner.Actor:
+    """The actor playing this source's runs in `config` under `protocol` (a baseline is
     evaluated frozen only: `evaluate` refuses the others)."""
     if not self.trained:
-      return runner.heuristic_actor(config.env.num_rotations), (0, 1)
-    method = self.network.method  # `networks.QNetwork` carries its method
+      return runner.heuristic_actor(config.env.num_rotations)
     if protocol.learns:
-      return runner.Online(self.network, config), method.views
+      return runner.Online(self.network, config)
     graphdef, params = nnx.split(self.network)
     q_maps = lambda obs: nnx.merge(graphdef, params)(obs.color, obs.depth)
-    return runner.greedy_actor(q_maps, method, config, protocol.no_repeat), method.views
+    # `networks.QNetwork` carries its method
+    return runner.greedy_actor(q_maps, self.network.method, config, protocol.no_repeat)
 
 
 def trained(path, overrides=()) -> Source:

@@ -5,6 +5,8 @@ Q maps are (B, 2, K, R, R): primitive (PUSH 0, GRASP 1), rotation, heightmap row
 """
 from __future__ import annotations
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import optax
@@ -105,20 +107,35 @@ def surface_height(depth, views: tuple[int, ...]):
   return jnp.max(depth[:, jnp.asarray(views)], axis=1)
 
 
-def to_world(action: PixelAction, depth, views: tuple[int, ...], config: Config) -> Action:
-  """World-frame primitive at the pixel; z is the highest surface the method's views see there."""
-  x, y = pixel_to_world(action.row, action.col, config.perception.heightmap_resolution,
-                        config.scene.workspace_half)
+def to_world(action: PixelAction, depth, views: tuple[int, ...], resolution: float,
+             workspace_half: float) -> Action:
+  """World-frame primitive at the pixel of a grid of `resolution` m over the workspace; z is the
+  highest surface the method's views see there."""
+  x, y = pixel_to_world(action.row, action.col, resolution, workspace_half)
   z = surface_height(depth, views)[jnp.arange(depth.shape[0]), action.row, action.col]
   return Action(primitive=action.primitive, rotation=action.rotation, x=x, y=y, z=z)
 
 
-def reward(primitive, grasp_success, changed, train: TrainConfig):
-  """Grasp 1 on success, `train.failed_grasp_reward` on a failure that changed the scene, else
-  0; push 0.5 on change, else `train.no_change_push_reward`."""
-  grasp_reward = jnp.where(grasp_success, 1.0,
-                           jnp.where(changed, train.failed_grasp_reward, 0.0))
-  push_reward = jnp.where(changed, 0.5, train.no_change_push_reward)
+@dataclasses.dataclass(frozen=True)
+class Reward:
+  """What an action earns: 1 for a grasp that lifts an object, `failed_grasp` for one that failed
+  but changed the scene (else 0), 0.5 for a push that changed it, `no_change_push` for one that
+  did not; `bootstrap_no_change`: whether an action that changed nothing bootstraps its target.
+  Training's settings (`of`), which an online evaluation learns under too."""
+  failed_grasp: float
+  no_change_push: float
+  bootstrap_no_change: bool
+
+  @classmethod
+  def of(cls, train: TrainConfig) -> Reward:
+    return cls(failed_grasp=train.failed_grasp_reward, no_change_push=train.no_change_push_reward,
+               bootstrap_no_change=train.bootstrap_no_change)
+
+
+def reward(primitive, grasp_success, changed, paid: Reward):
+  """Each action's reward (B,) as `paid` says."""
+  grasp_reward = jnp.where(grasp_success, 1.0, jnp.where(changed, paid.failed_grasp, 0.0))
+  push_reward = jnp.where(changed, 0.5, paid.no_change_push)
   return jnp.where(primitive == GRASP, grasp_reward, push_reward)
 
 

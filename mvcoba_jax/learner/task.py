@@ -1,5 +1,5 @@
-"""The push-and-grasp task on B tabletops: its state and the one lockstep step that training and
-evaluation run.
+"""The push-and-grasp task on B tabletops: the `Task` built once from a config, its state and the
+one lockstep step that training and evaluation run.
 
 An action is executed in every tabletop, the scene observed again, and the task's bookkeeping done
 (docs/design.md): change observation, reward, the count of consecutive failed actions and
@@ -8,6 +8,7 @@ caller's: training swaps in a fresh tabletop (`restart`), evaluation stops count
 """
 from __future__ import annotations
 
+import dataclasses
 from typing import Callable
 
 import jax
@@ -15,7 +16,7 @@ import jax.numpy as jnp
 from flax import struct
 
 from mvcoba_jax import perception
-from mvcoba_jax.config import TrainConfig
+from mvcoba_jax.config import Config, PerceptionConfig
 from mvcoba_jax.learner import agent
 from mvcoba_jax.learner.replay import Transition
 from mvcoba_jax.sim.tabletop import EnvState, StepInfo, Tabletop, where_envs
@@ -45,67 +46,87 @@ def _whole(fn: Callable) -> Callable:
   return fn
 
 
-def observe(env: Tabletop, states: EnvState, per_env: Callable = _whole) -> perception.Observation:
-  """Heightmaps of every tabletop (B,). `per_env` wraps per-tabletop work (`Trainer.per_env`)."""
-  return per_env(jax.vmap(lambda s: perception.observe(env, s)))(states)
+@dataclasses.dataclass(frozen=True, eq=False)
+class Task:
+  """Everything the task reads, built once from a config (`build`) and held by training and
+  evaluation alike, so nothing past it reads the config: the tabletops, how the cameras' pictures
+  become heightmaps, what actions earn, and the views whose heights place an action. Hashed by
+  identity: the compiled programs that run it take it as a static argument.
 
+  `per_env` arguments wrap per-tabletop work (`Trainer.per_env`: each device its own share)."""
+  env: Tabletop
+  perception: PerceptionConfig
+  reward: agent.Reward
+  views: tuple[int, ...]
 
-def begin(env: Tabletop, states: EnvState, per_env: Callable = _whole) -> State:
-  """Tabletops at the start of their episodes: observed, `changed` True, no failures."""
-  b = states.in_play.shape[0]
-  return State(env=states, obs=observe(env, states, per_env), changed=jnp.ones(b, bool),
-               failures=jnp.zeros(b, jnp.int32))
+  @classmethod
+  def build(cls, config: Config, views: tuple[int, ...], frames: int = 0) -> Task:
+    """The task of `config` played through `views` (the method's); `frames`: snapshots of each
+    primitive `step` returns, for videos."""
+    return cls(env=Tabletop(config.tabletop, frames=frames), perception=config.perception,
+               reward=agent.Reward.of(config.train), views=tuple(views))
 
+  def observe(self, states: EnvState, per_env: Callable = _whole) -> perception.Observation:
+    """Heightmaps of every tabletop (B,)."""
+    return per_env(jax.vmap(lambda s: perception.observe(self.env, s, self.perception)))(states)
 
-def restart(env: Tabletop, state: State, fresh, states: EnvState,
-            per_env: Callable = _whole) -> State:
-  """`state` with the tabletops `states` in place, those where `fresh` (B,) begun anew (observed
-  again, `changed` True, no failures): training's fresh tabletops for the episodes that ended."""
-  obs = jax.lax.cond(jnp.any(fresh),
-                     lambda: where_envs(fresh, observe(env, states, per_env), state.obs),
-                     lambda: state.obs)
-  return State(env=states, obs=obs, changed=state.changed | fresh,
-               failures=jnp.where(fresh, 0, state.failures))
+  def to_world(self, action: agent.PixelAction, depth) -> agent.Action:
+    """The primitives (B,) the pixel actions on heightmaps `depth` (B, V, R, R) stand for."""
+    return agent.to_world(action, depth, self.views, self.perception.heightmap_resolution,
+                          self.env.config.scene.workspace_half)
 
+  def begin(self, states: EnvState, per_env: Callable = _whole) -> State:
+    """Tabletops at the start of their episodes: observed, `changed` True, no failures."""
+    b = states.in_play.shape[0]
+    return State(env=states, obs=self.observe(states, per_env), changed=jnp.ones(b, bool),
+                 failures=jnp.zeros(b, jnp.int32))
 
-def step(env: Tabletop, views: tuple[int, ...], state: State, action: agent.PixelAction,
-         train: TrainConfig, per_env: Callable = _whole) -> tuple[State, Outcome]:
-  """Executes `action` (B,) chosen on `state.obs` in every tabletop; returns the task after it
-  and the outcome, rewarded as `train` says."""
-  config = env.config
-  obs = state.obs
-  states, info = per_env(jax.vmap(env.step))(
-      state.env, agent.to_world(action, obs.depth, views, config))
-  next_obs = observe(env, states, per_env)
-  healthy = info.healthy
-  changed = perception.change_observed(obs, next_obs, info.grasp_success,
-                                       config.perception) & healthy
-  if not config.perception.failed_grasp_changes:
-    changed &= (action.primitive != agent.GRASP) | info.grasp_success
-  reward = jnp.where(healthy, agent.reward(action.primitive, info.grasp_success, changed, train),
-                     0.0)
-  failures = jnp.where(agent.failed(action.primitive, info.grasp_success, changed),
-                       state.failures + 1, 0)
-  cleared = ~jnp.any(states.in_play, axis=1)
-  done = cleared | (failures > config.env.max_failures) | ~healthy
-  return (State(env=states, obs=next_obs, changed=changed, failures=failures),
-          Outcome(info=info, changed=changed, reward=reward, failures=failures, cleared=cleared,
-                  done=done))
+  def restart(self, state: State, fresh, states: EnvState, per_env: Callable = _whole) -> State:
+    """`state` with the tabletops `states` in place, those where `fresh` (B,) begun anew (observed
+    again, `changed` True, no failures): training's fresh tabletops for the episodes that
+    ended."""
+    obs = jax.lax.cond(jnp.any(fresh),
+                       lambda: where_envs(fresh, self.observe(states, per_env), state.obs),
+                       lambda: state.obs)
+    return State(env=states, obs=obs, changed=state.changed | fresh,
+                 failures=jnp.where(fresh, 0, state.failures))
 
+  def step(self, state: State, action: agent.PixelAction,
+           per_env: Callable = _whole) -> tuple[State, Outcome]:
+    """Executes `action` (B,) chosen on `state.obs` in every tabletop; returns the task after it
+    and the outcome."""
+    obs = state.obs
+    states, info = per_env(jax.vmap(self.env.step))(state.env, self.to_world(action, obs.depth))
+    next_obs = self.observe(states, per_env)
+    healthy = info.healthy
+    changed = perception.change_observed(obs, next_obs, info.grasp_success,
+                                         self.perception) & healthy
+    if not self.perception.failed_grasp_changes:
+      changed &= (action.primitive != agent.GRASP) | info.grasp_success
+    reward = jnp.where(healthy,
+                       agent.reward(action.primitive, info.grasp_success, changed, self.reward),
+                       0.0)
+    failures = jnp.where(agent.failed(action.primitive, info.grasp_success, changed),
+                         state.failures + 1, 0)
+    cleared = ~jnp.any(states.in_play, axis=1)
+    done = cleared | (failures > self.env.config.env.max_failures) | ~healthy
+    return (State(env=states, obs=next_obs, changed=changed, failures=failures),
+            Outcome(info=info, changed=changed, reward=reward, failures=failures,
+                    cleared=cleared, done=done))
 
-def transition(before: perception.Observation, after: perception.Observation,
-               action: agent.PixelAction, out: Outcome, train: TrainConfig) -> Transition:
-  """The transition (B,) an action made, as training and online evaluation learn from it.
+  def transition(self, before: perception.Observation, after: perception.Observation,
+                 action: agent.PixelAction, out: Outcome) -> Transition:
+    """The transition (B,) an action made, as training and online evaluation learn from it.
 
-  The task goes on past an episode's end (docs/design.md; VPG does the same): the action that
-  ended one bootstraps from the fresh tabletop `after` shows, which the rule meets as after a
-  change. A zero future there made clearing the last object worth less than a failed grasp that
-  nudged it (0.5 + gamma * Q > 1), and the learned policy avoided clearing. Only bad physics
-  does not bootstrap (its next state is not a state of the task), nor, with
-  `train.bootstrap_no_change` off, an action that changed nothing."""
-  healthy = out.info.healthy
-  no_future = ~healthy | (~out.changed if not train.bootstrap_no_change else False)
-  return Transition(obs=before, primitive=action.primitive, rotation=action.rotation,
-                    row=action.row, col=action.col, reward=out.reward,
-                    next_obs=where_envs(healthy, after, before), done=no_future,
-                    changed=out.changed | out.done, next_value=jnp.zeros_like(out.reward))
+    The task goes on past an episode's end (docs/design.md; VPG does the same): the action that
+    ended one bootstraps from the fresh tabletop `after` shows, which the rule meets as after a
+    change. A zero future there made clearing the last object worth less than a failed grasp
+    that nudged it (0.5 + gamma * Q > 1), and the learned policy avoided clearing. Only bad
+    physics does not bootstrap (its next state is not a state of the task), nor, with
+    `train.bootstrap_no_change` off, an action that changed nothing."""
+    healthy = out.info.healthy
+    no_future = ~healthy | (~out.changed if not self.reward.bootstrap_no_change else False)
+    return Transition(obs=before, primitive=action.primitive, rotation=action.rotation,
+                      row=action.row, col=action.col, reward=out.reward,
+                      next_obs=where_envs(healthy, after, before), done=no_future,
+                      changed=out.changed | out.done, next_value=jnp.zeros_like(out.reward))

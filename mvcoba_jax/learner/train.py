@@ -144,7 +144,7 @@ def _train(config: Config, trainer: Trainer, devices, workdir: pathlib.Path, res
   say = print if progress else (lambda *a, **k: None)
   say(f'{config.network.method}: {config.num_envs} tabletops x '
       f'{config.train.steps_per_iteration} actions per compiled call on the '
-      f'{trainer.env.backend.name} backend; compiling (cached after the first time)...',
+      f'{trainer.task.env.backend.name} backend; compiling (cached after the first time)...',
       flush=True)
   state, records = _start(config, trainer, checkpoints, workdir, resume, lead, say)
   events = SummaryWriter(str(workdir / 'tensorboard')) if lead else None
@@ -159,7 +159,7 @@ def _train(config: Config, trainer: Trainer, devices, workdir: pathlib.Path, res
     while int(state.actions) < total:
       t0 = time.perf_counter()
       state, log = iterate(state, jnp.bool_(True), jnp.float32(-1.0))
-      new = action_records(log, int(state.actions) - per_iteration, len(trainer.views))
+      new = action_records(log, int(state.actions) - per_iteration, len(trainer.task.views))
       records += new
       iteration += 1
       rate = (int(state.actions) - done_before) / (time.perf_counter() - start)
@@ -181,7 +181,7 @@ def _train(config: Config, trainer: Trainer, devices, workdir: pathlib.Path, res
   train_summary = summary(records)
   say(f'training: {json.dumps(train_summary)}; wall {time.perf_counter() - start:.0f} s; '
       f'curves {curve}')
-  greedy = _greedy_check(iterate, state, eval_actions, per_iteration, len(trainer.views))
+  greedy = _greedy_check(iterate, state, eval_actions, per_iteration, len(trainer.task.views))
   if lead:
     (workdir / 'eval_summary.json').write_text(json.dumps(greedy, indent=1))
     for name in ('grasp_success', 'grasps_per_action'):

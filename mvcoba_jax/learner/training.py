@@ -18,7 +18,6 @@ from mvcoba_jax.config import Config
 from mvcoba_jax.learner import agent, networks, task
 from mvcoba_jax.learner import replay as replay_lib
 from mvcoba_jax.sim import reserve as reserve_lib
-from mvcoba_jax.sim.tabletop import Tabletop
 
 
 @struct.dataclass
@@ -67,9 +66,9 @@ class Trainer:
   def __init__(self, config: Config, mesh: Mesh | None = None):
     self.config = config
     self.mesh = mesh if mesh is not None and mesh.devices.size > 1 else None
-    self.env = Tabletop(config)
     model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
-    self.method, self.views = model.method, model.method.views  # the network carries its method
+    self.method = model.method  # the network carries its method
+    self.task = task.Task.build(config, self.method.views)
     self.graphdef, _ = nnx.split(model)
     self.optimizer = agent.optimizer(config.train)
 
@@ -94,7 +93,7 @@ class Trainer:
                          out_specs=PartitionSpec('data'), check_vma=False)
 
   def observe(self, env_states):
-    return task.observe(self.env, env_states, self.per_env)
+    return self.task.observe(env_states, self.per_env)
 
   # ---------------------------------------------------------------- state
   def init(self, key) -> TrainState:
@@ -102,8 +101,8 @@ class Trainer:
     b = self.config.num_envs
     k_params, k_env, key = jax.random.split(key, 3)
     params = self.init_params(k_params)
-    dropped = jax.vmap(self.env.reset)(jax.random.split(k_env, 3 * b))  # one compiled reset
-    begun = task.begin(self.env, jax.tree.map(lambda x: x[:b], dropped), self.per_env)
+    dropped = jax.vmap(self.task.env.reset)(jax.random.split(k_env, 3 * b))  # one compiled reset
+    begun = self.task.begin(jax.tree.map(lambda x: x[:b], dropped), self.per_env)
     obs = begun.obs
     example = jax.tree.map(lambda x: x[0], obs)
     return TrainState(
@@ -184,17 +183,17 @@ class Trainer:
     eps = jnp.where(epsilon >= 0, epsilon, agent.epsilon_at(state.actions, t))
     before = state.task
     q = self.q_maps(state.params, before.obs)
-    occupied = agent.surface_height(before.obs.depth, self.views) > t.explore_min_height
+    occupied = agent.surface_height(before.obs.depth, self.method.views) > t.explore_min_height
     maps = agent.rule_maps(q, before.obs.depth, self.method, self.config)
     action, explored = agent.epsilon_greedy(maps, before.changed, occupied, eps, k_act,
                                             self.method)
-    after, out = task.step(self.env, self.views, before, action, t, self.per_env)
+    after, out = self.task.step(before, action, self.per_env)
     info, healthy, changed, done = out.info, out.info.healthy, out.changed, out.done
-    env_states, reserve = reserve_lib.swap_in(self.per_env(jax.vmap(self.env.reset)),
+    env_states, reserve = reserve_lib.swap_in(self.per_env(jax.vmap(self.task.env.reset)),
                                               state.reserve, after.env, done, k_reset)
-    after = task.restart(self.env, after, done, env_states, self.per_env)
+    after = self.task.restart(after, done, env_states, self.per_env)
 
-    transition = task.transition(before.obs, after.obs, action, out, t)
+    transition = self.task.transition(before.obs, after.obs, action, out)
     if t.target == 'acting':
       # The last step's transitions led to the states acted on now (or ended in bad physics,
       # which does not bootstrap): this step's forward values their next states.

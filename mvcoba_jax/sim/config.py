@@ -1,7 +1,7 @@
 """Configuration of the simulated tabletop: the compiled scene, its cameras and the episode.
 
 The training configuration (`mvcoba_jax.config.Config`) holds these as its `scene` and `env`;
-the simulator itself needs only an object with those two fields (`TabletopConfig`). Every config
+the simulator is built from those two alone (`TabletopConfig`, `Config.tabletop`). Every config
 dataclass checks its fields' types and ranges when it is built (`check`), so presets, `--set`
 overrides, saved config.json files and exported model.json files all pass the same gate.
 """
@@ -12,7 +12,6 @@ import functools
 import importlib.util
 import math
 import typing
-from typing import Protocol
 
 from mvcoba_jax.sim.shapes import SHAPE_NAMES
 
@@ -247,7 +246,8 @@ class EnvConfig:
         'max_qvel': Between(0, 1e6, low_open=True), 'max_failures': Between(0, 1000)})
 
 
-class TabletopConfig(Protocol):
-  """What a `Tabletop` reads: the scene and the episode."""
-  scene: SceneConfig
-  env: EnvConfig
+@dataclasses.dataclass(frozen=True)
+class TabletopConfig:
+  """What a `Tabletop` reads: the scene and the episode, nothing of perception or training."""
+  scene: SceneConfig = SceneConfig()
+  env: EnvConfig = EnvConfig()

@@ -84,6 +84,9 @@ class Tabletop:
 
   def __init__(self, config: TabletopConfig, frames: int = 0):
     """`frames`: how many snapshots of each primitive `step` returns (for videos; 0: none)."""
+    if not isinstance(config, TabletopConfig):
+      raise TypeError(f'Tabletop takes the scene and episode alone (a TabletopConfig: '
+                      f'config.tabletop), not a {type(config).__name__}')
     self.config = config
     self.scene = build_scene(config.scene)
     self._parking = physics.Parking(self.scene)

@@ -77,7 +77,7 @@ def suite_config(config, pool):
 def settled_starts(cases, config, runs: int, seed: int = 0):
   """The environment and the settled start states (len(cases) * runs,) of a suite's runs, exactly
   as `mvcoba-eval --runs runs --seed seed` starts them: same scene, same placement jitter."""
-  env = Tabletop(suite_config(config, pool_for(cases)))
+  env = Tabletop(suite_config(config, pool_for(cases)).tabletop)
   layouts = stack_layouts([case_to_layout(c, env) for c in cases for _ in range(runs)])
   keys = jax.random.split(jax.random.PRNGKey(seed), len(cases) * runs)
   return env, jax.jit(lambda l, k: start(env, l, k)[0])(layouts, keys)
@@ -93,7 +93,7 @@ def case_problems(cases, config, settle_move: float = SETTLE_MOVE) -> list[str]:
   with none, objects that leave the workspace while the case settles as written, and objects
   listed on the table that move more than `settle_move` (objects set down on others settle onto
   the heap). Raises ScenarioError for a case that does not fit the scene (occluder slots)."""
-  env = Tabletop(suite_config(config, pool_for(cases)))
+  env = Tabletop(suite_config(config, pool_for(cases)).tabletop)
   layouts = [case_to_layout(case, env) for case in cases]
   problems = [overlaps(case, env) for case in cases]
   clean = [i for i, p in enumerate(problems) if not p]
@@ -121,7 +121,7 @@ def fitted(cases, config, bound: float):
   """(`cases` each made physically valid by `fit_overlaps` in the scene a suite of them gets,
   each case's objects' moves in m); ScenarioError names every object that would move more than
   `bound`."""
-  env = Tabletop(suite_config(config, pool_for(cases)))
+  env = Tabletop(suite_config(config, pool_for(cases)).tabletop)
   done, moves, stuck = [], [], []
   for case in cases:
     try:
@@ -150,7 +150,7 @@ def other_block_table(files, config, blocks: str) -> str:
       cases = [read_case(f, half, top, table) for f in files]
     except ScenarioError:  # a mesh the table does not name
       return None
-    env = Tabletop(suite_config(config, pool_for(cases)))
+    env = Tabletop(suite_config(config, pool_for(cases)).tabletop)
     return sum(len(overlaps(case, env)) for case in cases)
 
   here = count(blocks)

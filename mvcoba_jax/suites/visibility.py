@@ -14,7 +14,7 @@ def visibility(cases, config, seen: float = 0.5) -> list[dict]:
   """Per case: each object's visible fraction per camera (its rays' hits with the case's
   occluders over its hits with them parked), and the lines of the objects no camera sees above
   `seen` and of those only one camera does."""
-  env = Tabletop(suite_cases.suite_config(config, suite_cases.pool_for(cases)))
+  env = Tabletop(suite_cases.suite_config(config, suite_cases.pool_for(cases)).tabletop)
   layouts = [case_to_layout(c, env) for c in cases]
   states = jax.jit(jax.vmap(env.reset_from_case))(stack_layouts(layouts))
   origins, directions = env.camera_rays

@@ -61,7 +61,8 @@ def test_pinwheel_forces_a_push():
   the half turn's 8 rotations, lifts nothing: the fingers land on a neighbour and stop there
   (scene.press_force). The case's isolated cylinder, the control, is lifted."""
   case = read_case(SUITES_DIR / 'ordered' / 'ordered-00.scn')
-  env = Tabletop(suite_cases.suite_config(resolve('default'), suite_cases.pool_for([case])))
+  config = suite_cases.suite_config(resolve('default'), suite_cases.pool_for([case]))
+  env = Tabletop(config.tabletop)
   rotations = env.config.env.num_rotations // 2
   start = jax.jit(env.reset_from_case)(case_to_layout(case, env))
   n = len(case.objects)

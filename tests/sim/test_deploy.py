@@ -17,9 +17,8 @@ import pytest
 from mvcoba_jax import export, policy
 from mvcoba_jax.deploy import (DeployError, OnnxPolicy, calibration_from_dict, heightmaps,
                                read_color, read_depth)
-from mvcoba_jax.learner import task
 from mvcoba_jax.sim import cameras
-from tests.helpers import make_env
+from tests.helpers import make_env, make_task
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 # jax2onnx's GroupNorm plugin reads Variable.value, which Flax deprecates.
@@ -29,10 +28,11 @@ pytestmark = pytest.mark.filterwarnings('ignore::DeprecationWarning:jax2onnx')
 @pytest.fixture(scope='module')
 def scenes():
   """(env, 16 settled drops with occluders on a third, their camera images, their heightmaps)."""
-  env = make_env('reproduction', 'native', 'env.occluded_share=0.3')
+  task = make_task('reproduction', 'native', 'env.occluded_share=0.3')
+  env = task.env
   states = jax.jit(jax.vmap(env.reset))(jax.random.split(jax.random.PRNGKey(4), 16))
   images = jax.jit(jax.vmap(lambda s: cameras.render(env, s)))(states)
-  observed = jax.jit(lambda s: task.observe(env, s))(states)
+  observed = jax.jit(task.observe)(states)
   return env, states, images, observed
 
 

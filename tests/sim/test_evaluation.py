@@ -16,6 +16,7 @@ from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.config import resolve
 from mvcoba_jax.learner import agent
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts
+from mvcoba_jax.learner.task import Task
 from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites import SUITES_DIR
 from mvcoba_jax.suites import cases as suite_cases
@@ -32,18 +33,18 @@ def setup(tmp_path_factory):
   folder = tmp_path_factory.mktemp('suite')
   for name, text in CASES.items():
     (folder / name).write_text(text)
-  config = resolve('tiny')
   cases = [read_case(folder / name) for name in CASES]
-  env = Tabletop(suite_cases.suite_config(config, suite_cases.pool_for(cases)))
+  config = suite_cases.suite_config(resolve('tiny'), suite_cases.pool_for(cases))
+  task = Task.build(config, (0, 1))
   policy = runner.heuristic_actor(config.env.num_rotations)
-  run = lambda l, k: runner.evaluate(env, policy, (0, 1), l, k, MAX_ACTIONS)
-  layouts = stack_layouts([case_to_layout(c, env) for c in cases])
+  run = lambda l, k: runner.evaluate(task, policy, l, k, MAX_ACTIONS)
+  layouts = stack_layouts([case_to_layout(c, task.env) for c in cases])
   keys = jax.random.split(jax.random.PRNGKey(0), len(cases))
-  return folder, env, run, layouts, keys, run(layouts, keys)
+  return folder, task, run, layouts, keys, run(layouts, keys), config
 
 
 def test_cases_are_run_and_scored(setup):
-  _, _, _, _, _, runs = setup
+  _, _, _, _, _, runs, _ = setup
   logs = runner.run_logs(runs)
   assert [r.objects for r in logs] == [2, 3]
   for r in logs:
@@ -62,7 +63,7 @@ def test_vmapped_evaluation_equals_cases_one_by_one(setup):
   sizes round differently (3.7e-5 m apart after settling here), and a grasp on a knife edge can
   flip; within one program the batch entries cannot influence each other.
   """
-  _, _, run, layouts, keys, together = setup
+  _, _, run, layouts, keys, together, _ = setup
   n = len(CASES)
   for i in range(n):
     alone = run(jax.tree.map(lambda x: jnp.stack([x[i]] * n), layouts), jnp.stack([keys[i]] * n))
@@ -73,15 +74,16 @@ def test_vmapped_evaluation_equals_cases_one_by_one(setup):
 @pytest.fixture
 def one_and_three(setup, tmp_path):
   """Layouts of a lone cube (the heuristic clears it in one or two actions) and of `three`."""
-  _, env, _, layouts, _, _ = setup
+  _, task, _, layouts, _, _, _ = setup
   (tmp_path / 'one.scn').write_text('cube red 0.05 0.0 0\n')
-  return case_to_layout(read_case(tmp_path / 'one.scn'), env), jax.tree.map(lambda x: x[1], layouts)
+  return (case_to_layout(read_case(tmp_path / 'one.scn'), task.env),
+          jax.tree.map(lambda x: x[1], layouts))
 
 
 def test_a_run_that_finished_early_leaves_the_others_as_they_were_alone(setup, one_and_three):
   """A finished run steps on with its table emptied (cheaper); the batch's other runs do not
   notice."""
-  _, _, run, _, keys, _ = setup
+  _, _, run, _, keys, _, _ = setup
   one, three = one_and_three
   together = run(stack_layouts([one, three]), keys)
   alone = run(jax.tree.map(lambda x: jnp.stack([x] * 2), three), jnp.stack([keys[1]] * 2))
@@ -95,13 +97,13 @@ def test_runs_moved_to_a_smaller_batch_end_as_in_the_whole_batch(setup, one_and_
   """Two of four runs finish early; the runs still going move to a batch of two. With
   the heuristic (no network, nothing that rounds by batch size) every counter and every counted
   step of the trace is what the whole batch gives."""
-  env = setup[1]
+  task = setup[1]
   one, three = one_and_three
   four = stack_layouts([one, one, one, three])
   keys = jax.random.split(jax.random.PRNGKey(3), 4)
-  policy = runner.heuristic_actor(env.config.env.num_rotations)
-  run = lambda smallest: runner.evaluate(env, policy, (0, 1), four, keys, MAX_ACTIONS,
-                                             record=True, smallest=smallest)
+  policy = runner.heuristic_actor(task.env.config.env.num_rotations)
+  run = lambda smallest: runner.evaluate(task, policy, four, keys, MAX_ACTIONS, record=True,
+                                         smallest=smallest)
   whole, moved = run(smallest=4), run(smallest=1)
   assert sum(r.actions < MAX_ACTIONS for r in runner.run_logs(moved)) >= 2
   for a, b in zip(jax.tree.leaves(whole.replace(trace=None)),
@@ -115,7 +117,7 @@ def test_runs_moved_to_a_smaller_batch_end_as_in_the_whole_batch(setup, one_and_
 
 def test_suite_pool_smaller_than_the_training_drops_is_fine():
   config = suite_cases.suite_config(resolve('default'), (('cube', 2),))
-  assert Tabletop(config).num_slots == 2 and config.env.num_objects == 2
+  assert Tabletop(config.tabletop).num_slots == 2 and config.env.num_objects == 2
 
 
 def test_malformed_case_fails_with_file_and_line_before_compiling(tmp_path, capsys):
@@ -244,7 +246,7 @@ def test_run_strip_draws_each_action_where_it_was_taken():
       left_workspace=np.zeros((1, 3, 1), bool), primitive=steps(1, 1, 0),
       rotation=steps(0, 0, 0), row=steps(10, 30, 40), col=steps(20, 30, 10),
       grasp_success=steps(True, False, False), active=steps(True, True, True))
-  image = viz.run_strip(trace, 0, config, scale=scale)
+  image = viz.run_strip(trace, 0, Task.build(config, (0, 1)), scale=scale)
   width = r * scale
   assert image.shape == (2 * width, 3 * width + 2 * 4, 3)
   frame = lambda t, view: image[view * width:(view + 1) * width,
@@ -319,13 +321,13 @@ def test_losses_name_the_action_and_where_the_object_was():
   xyz[0, 1, 1] = (0.2, -0.05, 0.03)
   left = np.zeros((1, 3, 2), bool)
   left[0, 1, 1] = left[0, 2, 0] = True
-  r = perception.grid_size(config)
+  r = perception.grid_size(config.perception, config.scene)
   trace = runner.Trace(
       color=np.zeros((1, 3, 2, r, r, 3), np.uint8), object_xyz=xyz, left_workspace=left,
       primitive=steps(1, 0, 1), rotation=steps(0, 0, 0), row=steps(0, r // 2, 0),
       col=steps(0, r // 2, 0), grasp_success=steps(True, False, False),
       active=steps(True, True, False))
-  (record,) = runner.losses(trace, ['c_run0'], config)
+  (record,) = runner.losses(trace, ['c_run0'], Task.build(config, (0, 1)))
   half = config.perception.heightmap_resolution / 2  # the centre of cell (r/2, r/2)
   assert record['run'] == 'c_run0' and record['action'] == 1 and record['slot'] == 1
   assert record['primitive'] == 'push' and not record['grasp_success']
@@ -350,13 +352,13 @@ def test_repeated_failed_actions_are_counted_per_run(setup):
   """A policy that grasps at one bare corner every time fails the same way until the failure
   rule ends the run: every action after the first repeats a failed action with nothing changed
   in between. The heuristic, whose rotation is drawn anew, repeats nothing exactly here."""
-  _, env, _, layouts, keys, heuristic = setup
+  _, task, _, layouts, keys, heuristic, config = setup
   zeros = lambda obs: jnp.zeros(obs.depth.shape[0], jnp.int32)
   stubborn = runner.Frozen(lambda obs, changed, keys, failed: agent.PixelAction(
       primitive=zeros(obs) + agent.GRASP, rotation=zeros(obs), row=zeros(obs), col=zeros(obs)))
-  runs = runner.evaluate(env, stubborn, (0, 1), layouts, keys, 10)
+  runs = runner.evaluate(task, stubborn, layouts, keys, 10)
   logs = runner.run_logs(runs)
-  attempts = env.config.env.max_failures + 1
+  attempts = config.env.max_failures + 1
   assert [r.actions for r in logs] == [attempts] * 2
   assert [r.repeated_failures for r in logs] == [attempts - 1] * 2
   assert metrics.case_metrics(logs)['repeated_failures'] == attempts - 1
@@ -369,10 +371,10 @@ def online(setup):
   from flax import nnx
 
   from mvcoba_jax.learner import networks
-  _, env, _, layouts, keys, _ = setup
-  model = networks.build_network(env.config.network, env.config.env.num_rotations, nnx.Rngs(0))
-  policy, views = Source('mvcoba', env.config, model).actor(env.config, ONLINE)
-  run = lambda l, k, cap: runner.evaluate(env, policy, views, l, k, cap)
+  _, task, _, layouts, keys, _, config = setup
+  model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
+  policy = Source('mvcoba', config, model).actor(config, ONLINE)
+  run = lambda l, k, cap: runner.evaluate(task, policy, l, k, cap)
   return policy, run, layouts, keys
 
 
@@ -412,16 +414,15 @@ def test_no_repeat_takes_the_next_best_action_instead_of_a_failed_one(setup):
   """Maps that score the bare corner cells best, in order: the greedy policy grasps at the same
   cell until the failure rule ends the run; with `no_repeat` it moves on to the next best cell
   after each failure, repeating none."""
-  _, env, _, layouts, keys, _ = setup
-  r = perception.grid_size(env.config)
+  _, task, _, layouts, keys, _, config = setup
+  r = perception.grid_size(config.perception, config.scene)
   ramp = -jnp.arange(r * r, dtype=jnp.float32).reshape(r, r)
   q_maps = lambda obs: jnp.broadcast_to(ramp, (obs.depth.shape[0], 2, 1, r, r))
   logs = {}
   for no_repeat in (False, True):
-    policy = runner.greedy_actor(q_maps, methods.get('grasp_only'), env.config, no_repeat)
-    logs[no_repeat] = runner.run_logs(runner.evaluate(env, policy, (0, 1), layouts,
-                                                              keys, 10))
-  attempts = env.config.env.max_failures + 1
+    policy = runner.greedy_actor(q_maps, methods.get('grasp_only'), config, no_repeat)
+    logs[no_repeat] = runner.run_logs(runner.evaluate(task, policy, layouts, keys, 10))
+  attempts = config.env.max_failures + 1
   assert [(g.actions, g.repeated_failures) for g in logs[False]] == [(attempts, attempts - 1)] * 2
   assert [(g.actions, g.repeated_failures) for g in logs[True]] == [(attempts, 0)] * 2
 

@@ -97,13 +97,15 @@ def exported(run, tmp_path_factory):
 @pytest.fixture(scope='module')
 def states(run):
   """name -> (color (1, V, R, R, 3), depth (1, V, R, R)): random, and rendered from a layout."""
-  env = run[0].env
-  side, views = perception.grid_size(env.config), len(env.config.scene.cameras)
+  task = run[0].task
+  env = task.env
+  side = perception.grid_size(task.perception, env.config.scene)
+  views = len(env.config.scene.cameras)
   kc, kd = jax.random.split(jax.random.PRNGKey(3))
   random = (jax.random.uniform(kc, (1, views, side, side, 3)),
             0.1 * jax.random.uniform(kd, (1, views, side, side)))
   place = jax.jit(jax.vmap(env.place))  # as tests/test_perception.py: its compiled programs
-  look = jax.jit(jax.vmap(lambda s: perception.observe(env, s)))
+  look = jax.jit(task.observe)
   obs = look(place(stack([layout(env, [(CUBE, -0.06, 0.04, 0.4), (FLAT, 0.05, -0.03, 0.0)])])))
   return {'random': random, 'rendered': (obs.color, obs.depth)}
 
@@ -129,7 +131,7 @@ def onnx_outputs(session, color, depth, changed: bool) -> dict:
 def jax_action(q, changed, depth, trainer):
   """Greedy action and world point the way the training step picks and executes them."""
   action = agent.greedy_actions(jnp.asarray(q), jnp.array([changed]), trainer.method)
-  world = agent.to_world(action, depth, trainer.views, trainer.config)
+  world = trainer.task.to_world(action, depth)
   return {**{k: int(getattr(action, k)[0]) for k in ('primitive', 'rotation', 'row', 'col')},
           **{k: float(getattr(world, k)[0]) for k in ('x', 'y', 'z')}}
 
@@ -240,7 +242,7 @@ def test_other_networks_export_round_trip_with_onnx_parity(method, overrides, tm
   assert config == trainer.config and step == 8
   views = len(config.scene.cameras)
   assert model_json['heightmap']['num_views'] == views == (4 if method == 'mvp' else 2)
-  side = perception.grid_size(config)
+  side = perception.grid_size(config.perception, config.scene)
   kc, kd = jax.random.split(jax.random.PRNGKey(5))
   color = jax.random.uniform(kc, (1, views, side, side, 3))
   depth = 0.1 * jax.random.uniform(kd, (1, views, side, side)) ** 4
@@ -280,7 +282,7 @@ def test_a_policy_that_fills_unseen_cells_acts_alike_in_jax_and_deploy(tmp_path)
   jax_policy, onnx = policy.load(folder), OnnxPolicy(folder)
   assert onnx.spec.fill_unseen and not onnx.spec.failed_grasp_changes
   config = jax_policy.config
-  side = perception.grid_size(config)
+  side = perception.grid_size(config.perception, config.scene)
   rng = np.random.default_rng(2)
   depth = np.zeros((2, side, side), np.float32)
   depth[:, 10:20, 12:22], depth[:, 30:40, 25:33] = 0.05, 0.03
@@ -288,7 +290,7 @@ def test_a_policy_that_fills_unseen_cells_acts_alike_in_jax_and_deploy(tmp_path)
   seen = np.ones((2, side, side), bool)
   seen[0, :, side // 2:] = False  # camera 0 blind to half the table
   depth[0][~seen[0]], color[0][~seen[0]] = 0.0, 0.0
-  cal = calibration_from_dict(cameras.calibration(trainer.env))
+  cal = calibration_from_dict(cameras.calibration(trainer.task.env))
   filled_color, filled_depth = filled(color, depth, seen)
   assert (filled_depth[0] == depth[1]).all()  # camera 1 saw all: camera 0 takes its heights
   for changed in (True, False):
@@ -437,7 +439,7 @@ def test_a_loaded_policy_acts_as_evaluation_does():
   obs = perception.Observation(color=jnp.asarray(state['color'])[None],
                                depth=jnp.asarray(state['depth'])[None],
                                seen=jnp.asarray(state['seen'])[None])
-  greedy, _ = Source(config.network.method, config, model).actor(config, FROZEN)
+  greedy = Source(config.network.method, config, model).actor(config, FROZEN)
   for changed in (True, False):
     chosen, _ = greedy.act(None, obs, jnp.asarray([changed]), jnp.ones(1, bool), None, None)
     decision = loaded.act(state['color'], state['depth'], changed, seen=state['seen'])

@@ -71,7 +71,7 @@ def test_concurrent_callers_get_the_results_of_callers_one_at_a_time():
 def test_frames_of_a_primitive_end_where_the_step_ends():
   """`Tabletop(frames=F)` records F snapshots inside the same physics call: they change during
   the primitive and the last one holds the objects where the step leaves them."""
-  env = Tabletop(resolve('tiny'), frames=3)
+  env = Tabletop(resolve('tiny').tabletop, frames=3)
   assert len(env.frames) == 3 and env.frames[-1] == env.script.length - 1
   state = jax.jit(env.reset_from_case)(layout(env, [(CUBE, 0.0, 0.0, 0.0)]))
   action = actions([(PUSH, 0, -0.05, 0.0, 0.05)])  # pushed 10 cm along +x

@@ -11,33 +11,38 @@ from mvcoba_jax.learner import networks
 from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.geometry import pixel_to_world
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case
-from tests.helpers import BACKENDS, layout, make_env, stack
+from tests.helpers import BACKENDS, layout, make_task, stack
 
 CUBE, CUBE2, FLAT, FLAT2 = 0, 1, 2, 3
 BOX_AT = (0.05, -0.03)  # flat box 10 x 5 x 2.5 cm, long side along x
 
 
 @pytest.fixture(scope='module', params=BACKENDS)
-def env(request):
-  return make_env('tiny', request.param)
+def task(request):
+  return make_task('tiny', request.param)
 
 
-def observer(env):
-  place = jax.jit(jax.vmap(env.place))
-  look = jax.jit(jax.vmap(lambda s: perception.observe(env, s)))
+@pytest.fixture(scope='module')
+def env(task):
+  return task.env
+
+
+def observer(task):
+  place = jax.jit(jax.vmap(task.env.place))
+  look = jax.jit(task.observe)
   return lambda layouts: look(place(stack(layouts)))
 
 
 @pytest.fixture(scope='module')
-def observe(env):
-  return observer(env)
+def observe(task):
+  return observer(task)
 
 
-def cell_centres(env):
-  side = perception.grid_size(env.config)
+def cell_centres(task):
+  scene = task.env.config.scene
+  side = perception.grid_size(task.perception, scene)
   rows, cols = np.meshgrid(np.arange(side), np.arange(side), indexing='ij')
-  return pixel_to_world(rows, cols, env.config.perception.heightmap_resolution,
-                        env.config.scene.workspace_half)
+  return pixel_to_world(rows, cols, task.perception.heightmap_resolution, scene.workspace_half)
 
 
 def scenario(tmp_path, text):
@@ -46,12 +51,12 @@ def scenario(tmp_path, text):
   return path
 
 
-def test_box_of_known_size_has_the_right_heights_cells_and_colour(env, observe):
+def test_box_of_known_size_has_the_right_heights_cells_and_colour(task, env, observe):
   lay = layout(env, [(FLAT, *BOX_AT, 0.0)])
   lay = lay.replace(color=lay.color.at[FLAT].set(shapes.COLORS[3]))
   obs = jax.tree.map(lambda x: x[0], observe([lay]))
-  res = env.config.perception.heightmap_resolution
-  x, y = cell_centres(env)
+  res = task.perception.heightmap_resolution
+  x, y = cell_centres(task)
   dx, dy = np.abs(x - BOX_AT[0]), np.abs(y - BOX_AT[1])
   inside = (dx < 0.05 - res) & (dy < 0.025 - res)  # a cell in from the edges
   outside = (dx > 0.05 + res) | (dy > 0.025 + res)  # a cell out from the edges
@@ -91,9 +96,9 @@ def test_fill_unseen_gives_a_blinded_view_what_the_other_saw(tmp_path):
   says what each camera saw, and camera 2's own maps are unchanged."""
   case = read_case(scenario(tmp_path, 'cube blue 0.1 0.12 0\ncube green -0.1 -0.12 0\n'
                                       'occluder 0 0.3 0 0.49 0\n'))
-  plain, filled = (jax.tree.map(lambda x: np.asarray(x[0]), observer(env)([case_to_layout(
-      case, env)])) for env in (make_env('tiny', 'native'),
-                                make_env('tiny', 'native', 'perception.fill_unseen=true')))
+  plain, filled = (jax.tree.map(lambda x: np.asarray(x[0]), observer(task)([case_to_layout(
+      case, task.env)])) for task in (make_task('tiny', 'native'),
+                                      make_task('tiny', 'native', 'perception.fill_unseen=true')))
   assert not filled.seen[0].any() and (filled.seen == plain.seen).all()
   seen = plain.seen[1]
   np.testing.assert_array_equal(filled.depth[0][seen], plain.depth[1][seen])
@@ -105,14 +110,15 @@ def test_fill_unseen_gives_a_blinded_view_what_the_other_saw(tmp_path):
 def test_mvp_fuses_its_viewpoints_past_a_blocked_one(tmp_path):
   """MVP's four camera poses: with the first fully blocked, the fused heightmap its network reads
   still holds both cubes at their height."""
-  env = make_env('tiny', 'native', 'network.method=mvp')
+  task = make_task('tiny', 'native', 'network.method=mvp')
+  env = task.env
   assert len(env.config.scene.cameras) == 4
   case = read_case(scenario(tmp_path, 'cube blue 0.1 0.12 0\ncube green -0.1 -0.12 0\n'
                                       'occluder 0 0.3 0 0.49 0\n'))
-  obs = observer(env)([case_to_layout(case, env)])
+  obs = observer(task)([case_to_layout(case, env)])
   assert not np.asarray(obs.seen[0, 0]).any()
   color, depth = networks.fuse_views(obs.color, obs.depth)
-  x, y = cell_centres(env)
+  x, y = cell_centres(task)
   for cx, cy in ((0.1, 0.12), (-0.1, -0.12)):
     on_top = (np.abs(x - cx) < 0.02) & (np.abs(y - cy) < 0.02)
     np.testing.assert_allclose(np.asarray(depth[0, 0])[on_top], 0.05, atol=0.002)
@@ -128,8 +134,8 @@ def test_partial_occluders_leave_each_view_an_object_the_other_misses(env, obser
   assert view1 - view2 and view2 - view1, (view1, view2)
 
 
-def test_change_observation(env, observe):
-  cfg = env.config.perception
+def test_change_observation(task, env, observe):
+  cfg = task.perception
   lays = [layout(env, [(CUBE, 0.0, 0.0, 0.0), (FLAT, -0.1, 0.1, 0.0)]),
           layout(env, [(CUBE, 0.05, 0.0, 0.0), (FLAT, -0.1, 0.1, 0.0)]),  # cube moved 5 cm
           layout(env, [(FLAT, -0.1, 0.1, 0.0)])]  # cube grasped away
@@ -167,8 +173,8 @@ def test_change_threshold_means_the_same_area_at_any_resolution(resolution, cell
 
 def test_both_backends_see_the_same_heightmaps():
   """One scene, cast by mj_ray and by mjx.ray: the same cells seen, heights within 2 mm."""
-  native, mjx = make_env('tiny', 'native'), make_env('tiny', 'mjx')
-  scene = [layout(native, [(CUBE, 0.03, -0.02, 0.3), (FLAT, -0.08, 0.06, 0.5),
+  native, mjx = make_task('tiny', 'native'), make_task('tiny', 'mjx')
+  scene = [layout(native.env, [(CUBE, 0.03, -0.02, 0.3), (FLAT, -0.08, 0.06, 0.5),
                            (CUBE2, 0.12, 0.1, 1.0), (FLAT2, -0.1, -0.15, 2.0)])]
   a, b = observer(native)(scene), observer(mjx)(scene)
   seen_a, seen_b = np.asarray(a.seen), np.asarray(b.seen)

@@ -5,7 +5,7 @@ import jax
 import numpy as np
 import pytest
 
-from tests.helpers import BACKENDS, make_env
+from tests.helpers import BACKENDS, make_env, make_task
 from tests.penetration import max_penetration
 
 
@@ -76,10 +76,9 @@ def test_occluded_share_hides_one_camera_wholly_or_in_part():
   """With env.occluded_share=1 every drop gets an occluder before one camera (drawn from
   `occluders.TRAINING`): that view sees none or little of the table (slot 0) or a part less
   (slot 1, 10-90% of what it would see); the other view sees as without one."""
-  from mvcoba_jax.learner import task
-  env = make_env('default', 'native', 'env.occluded_share=1', 'env.num_objects=3')
-  states = jax.jit(jax.vmap(env.reset))(jax.random.split(jax.random.PRNGKey(5), 12))
-  seen = np.asarray(jax.jit(lambda s: task.observe(env, s))(states).seen).mean(axis=(2, 3))
+  task = make_task('default', 'native', 'env.occluded_share=1', 'env.num_objects=3')
+  states = jax.jit(jax.vmap(task.env.reset))(jax.random.split(jax.random.PRNGKey(5), 12))
+  seen = np.asarray(jax.jit(task.observe)(states).seen).mean(axis=(2, 3))
   hidden, other = seen.min(axis=1), seen.max(axis=1)
   assert (other > 0.8).all() and (hidden < 0.9).all(), seen
   assert (hidden < 0.05).any() and (hidden > 0.2).any(), seen  # whole and partial both drawn

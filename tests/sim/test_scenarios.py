@@ -63,7 +63,7 @@ def three_cubes(occluders=()):
 
 @pytest.fixture(scope='module')
 def tiny():
-  return Tabletop(three_cubes())
+  return Tabletop(three_cubes().tabletop)
 
 
 # ------------------------------------------------------------------------------ our format
@@ -232,7 +232,7 @@ def deepest_overlap(env, layout) -> float:
 
 
 def test_public_vpg_cases_do_not_interpenetrate(public_cases):
-  env = Tabletop(resolve('default'))
+  env = Tabletop(resolve('default').tabletop)
   layouts = [case_to_layout(c, env) for c in public_cases]
   batch = stack_layouts(layouts)
   assert batch.pos.shape == (len(layouts), env.num_slots, 3)
@@ -287,7 +287,7 @@ def test_shipped_suites_are_generated_and_start_apart(suite, generated):
   n_cases, fewest, most = SHIPPED[suite]
   assert len(cases) == n_cases
   assert all(fewest + 1 <= len(c.objects) <= most + 1 for c in cases)  # + the isolated object
-  env = Tabletop(suite_config(resolve('default'), pool_for(cases)))
+  env = Tabletop(suite_config(resolve('default'), pool_for(cases)).tabletop)
   for case in cases:
     deepest = deepest_overlap(env, case_to_layout(case, env))
     assert deepest < 0.002, (case.name, deepest)
@@ -333,7 +333,7 @@ def test_case_to_layout_names_missing_slots(tmp_path, tiny):
 
 
 def test_case_to_layout_places_occluders(tmp_path):
-  env = Tabletop(three_cubes(occluders=((0.01, 0.1, 0.1), (0.01, 0.1, 0.1))))
+  env = Tabletop(three_cubes(occluders=((0.01, 0.1, 0.1), (0.01, 0.1, 0.1))).tabletop)
   case = read_case(write(tmp_path, 'o.scn', 'cube red 0 0 0\noccluder 1 0.3 0 0.1 90\n'))
   layout = case_to_layout(case, env)
   parked_pos, parked_quat = env.parked_occluders()
@@ -384,7 +384,7 @@ def test_fit_overlaps_lifts_a_sunk_object_and_nudges_a_side_by_side_one(tmp_path
                   'cube green 0.1 0.0 0\n'
                   'cube yellow 0.144 0.0 0\n')         # apart would be x >= 0.150
   case = read_case(path)
-  env = Tabletop(suite_config(resolve('default'), pool_for([case])))
+  env = Tabletop(suite_config(resolve('default'), pool_for([case])).tabletop)
   assert len(overlaps(case, env)) == 2
   fitted, moves = fit_overlaps(case, env)
   lift, nudge = 0.008 - OVERLAP_TOLERANCE, 0.006 - OVERLAP_TOLERANCE
@@ -399,7 +399,7 @@ def test_fit_overlaps_lifts_a_sunk_object_and_nudges_a_side_by_side_one(tmp_path
 
 def test_fit_overlaps_leaves_a_valid_case_as_it_is(public_cases):
   from mvcoba_jax.sim.scenarios import fit_overlaps
-  env = Tabletop(suite_config(resolve('default'), pool_for(public_cases)))
+  env = Tabletop(suite_config(resolve('default'), pool_for(public_cases)).tabletop)
   for case in public_cases[:3]:
     assert fit_overlaps(case, env) == (case, (0.0,) * len(case.objects))
 

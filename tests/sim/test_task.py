@@ -5,23 +5,25 @@ import jax.numpy as jnp
 import numpy as np
 
 from mvcoba_jax.config import resolve
-from mvcoba_jax.learner import agent, task
+from mvcoba_jax.learner import agent
 from mvcoba_jax.learner.agent import PixelAction
+from mvcoba_jax.learner.task import State
 from mvcoba_jax.sim.geometry import world_to_pixel
 from mvcoba_jax.sim.primitives import GRASP, PUSH
-from tests.helpers import layout, make_env, stack
+from tests.helpers import layout, make_task, stack
 
 CUBE, CUBE2 = 0, 1
 
 
 def test_rewards_failures_and_episode_ends():
-  env = make_env('tiny', 'native', 'env.max_failures=2')
-  res, half = env.config.perception.heightmap_resolution, env.config.scene.workspace_half
+  task = make_task('tiny', 'native', 'env.max_failures=2')
+  env = task.env
+  res, half = task.perception.heightmap_resolution, env.config.scene.workspace_half
   one_cube = layout(env, [(CUBE, 0.0, 0.0, 0.0)])
   two_cubes = layout(env, [(CUBE, 0.0, 0.0, 0.0), (CUBE2, 0.12, 0.12, 0.0)])
   states = jax.jit(jax.vmap(env.reset_from_case))(stack([one_cube, two_cubes, two_cubes,
                                                          two_cubes]))
-  obs = task.observe(env, states)
+  obs = task.observe(states)
   cube = world_to_pixel(0.0, 0.0, res, half)
   empty = world_to_pixel(-0.15, 0.15, res, half)
   behind = world_to_pixel(-0.05, 0.0, res, half)
@@ -30,21 +32,20 @@ def test_rewards_failures_and_episode_ends():
   rows = [(GRASP, 0, *cube), (GRASP, 0, *empty), (GRASP, 0, *empty), (PUSH, 0, *behind)]
   action = PixelAction(*(jnp.asarray(c, jnp.int32) for c in zip(*rows)))
   failures = jnp.asarray([0, 2, 0, 0], jnp.int32)
-  before = task.State(env=states, obs=obs, changed=jnp.ones(4, bool), failures=failures)
-  after, out = jax.jit(lambda s, a: task.step(env, (0, 1), s, a, env.config.train))(
-      before, action)
+  before = State(env=states, obs=obs, changed=jnp.ones(4, bool), failures=failures)
+  after, out = jax.jit(task.step)(before, action)
   next_obs = after.obs
   np.testing.assert_array_equal(np.asarray(after.failures), np.asarray(out.failures))
   np.testing.assert_array_equal(np.asarray(out.info.grasp_success), [True, False, False, False])
   np.testing.assert_array_equal(np.asarray(out.reward), [1.0, 0.0, 0.0, 0.5])
   # The same transitions under the authors' rewards (a failed grasp 0 even where it changed the
   # scene, a push that changes nothing -1), and the paper text's 0.5 for such a grasp.
-  authors = resolve('authors').train
+  authors = agent.Reward.of(resolve('authors').train)
   np.testing.assert_array_equal(np.asarray(agent.reward(
       action.primitive, out.info.grasp_success, out.changed, authors)), [1.0, 0.0, 0.0, 0.5])
   assert float(agent.reward(PUSH, False, False, authors)) == -1.0
   assert float(agent.reward(GRASP, False, True, authors)) == 0.0
-  assert float(agent.reward(GRASP, False, True, env.config.train)) == 0.5
+  assert float(agent.reward(GRASP, False, True, task.reward)) == 0.5
   np.testing.assert_array_equal(np.asarray(out.changed), [True, False, False, True])
   np.testing.assert_array_equal(np.asarray(out.failures), [0, 3, 1, 0])
   np.testing.assert_array_equal(np.asarray(out.cleared), [True, False, False, False])
@@ -58,15 +59,16 @@ def test_a_failed_grasp_that_moves_blocks_is_no_change_when_so_configured():
   the same outcome is no change (the rule pushes next). A successful grasp changes either way."""
   outcomes = {}
   for setting in ('true', 'false'):
-    env = make_env('tiny', 'native', f'perception.failed_grasp_changes={setting}')
-    res, half = env.config.perception.heightmap_resolution, env.config.scene.workspace_half
+    task = make_task('tiny', 'native', f'perception.failed_grasp_changes={setting}')
+    env = task.env
+    res, half = task.perception.heightmap_resolution, env.config.scene.workspace_half
     two_cubes = layout(env, [(CUBE, 0.0, 0.0, 0.0), (CUBE2, 0.026, 0.0, 0.0)])
     states = jax.jit(jax.vmap(env.reset_from_case))(stack([two_cubes, two_cubes]))
     rows = [(GRASP, 0, *world_to_pixel(x, 0.0, res, half)) for x in (0.02, 0.03)]
     action = PixelAction(*(jnp.asarray(c, jnp.int32) for c in zip(*rows)))
-    before = task.State(env=states, obs=task.observe(env, states), changed=jnp.ones(2, bool),
-                        failures=jnp.zeros(2, jnp.int32))
-    _, out = jax.jit(lambda s, a: task.step(env, (0, 1), s, a, env.config.train))(before, action)
+    before = State(env=states, obs=task.observe(states), changed=jnp.ones(2, bool),
+                   failures=jnp.zeros(2, jnp.int32))
+    _, out = jax.jit(task.step)(before, action)
     outcomes[setting] = (np.asarray(out.info.grasp_success).tolist(),
                          np.asarray(out.changed).tolist(), np.asarray(out.failures).tolist())
   assert outcomes['true'] == ([False, True], [True, True], [1, 0])

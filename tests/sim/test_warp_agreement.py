@@ -6,31 +6,30 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from mvcoba_jax.learner import task
 from mvcoba_jax.sim import primitives
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.sim.primitives import Action
-from tests.helpers import make_env
+from tests.helpers import make_task
 
 SCENES = 64
 
 
 @pytest.fixture(scope='module')
-def envs():
+def tasks():
   """The default scene with 5 objects a drop, a third of them occluded, on both backends."""
   extra = ('env.num_objects=5', 'env.occluded_share=0.3')
-  return make_env('default', 'native', *extra), make_env('default', 'warp', *extra)
+  return make_task('default', 'native', *extra), make_task('default', 'warp', *extra)
 
 
 @pytest.fixture(scope='module')
-def settled(envs):
-  native, _ = envs
-  return jax.jit(jax.vmap(native.reset))(jax.random.split(jax.random.PRNGKey(3), SCENES))
+def settled(tasks):
+  native, _ = tasks
+  return jax.jit(jax.vmap(native.env.reset))(jax.random.split(jax.random.PRNGKey(3), SCENES))
 
 
-def test_heightmaps_of_settled_scenes_agree_with_native(envs, settled):
+def test_heightmaps_of_settled_scenes_agree_with_native(tasks, settled):
   """At least 99% of the cells of every view agree within 2 mm (seen or not, and height)."""
-  maps = [jax.jit(lambda s, env=env: task.observe(env, s))(settled) for env in envs]
+  maps = [jax.jit(task.observe)(settled) for task in tasks]
   (native, warp) = maps
   close = ((np.asarray(native.seen) == np.asarray(warp.seen))
            & (np.abs(np.asarray(native.depth) - np.asarray(warp.depth)) <= 0.002))
@@ -53,10 +52,11 @@ def fixed_actions(env, states) -> Action:
                 y=pos[:, 1] - back * jnp.sin(angle), z=pos[:, 2] + 0.02)
 
 
-def test_grasps_and_pushes_end_as_on_native(envs, settled):
+def test_grasps_and_pushes_end_as_on_native(tasks, settled):
   """Of 32 grasps and 32 pushes from the same settled states, at least 95% end alike: a grasp
   lifts an object on both or on neither; a push moves the object it pushes by the same amount
   within 2 cm, and leaves the same objects in the workspace."""
+  envs = [task.env for task in tasks]
   actions = fixed_actions(envs[0], settled)
   outcome = []
   for env in envs:

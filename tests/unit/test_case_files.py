@@ -128,7 +128,7 @@ def test_vpg_lines_outside_its_workspace_are_counted_and_named(tmp_path):
 
 
 def test_objects_placed_into_each_other_are_named_by_both_lines(tmp_path):
-  env = Tabletop(resolve('default', ['scene.pool=cube:3,tall_box:1', 'env.num_objects=4']))
+  env = Tabletop(resolve('default', ['scene.pool=cube:3,tall_box:1', 'env.num_objects=4']).tabletop)
   path = tmp_path / 'overlap.scn'
   path.write_text('cube red 0 0 0\ncube blue 0.02 0 0\ntall_box green 0.15 0.15 0\n')
   found = overlaps(read_case(path), env)
@@ -153,7 +153,7 @@ def test_mvcoba_authors_block_table(tmp_path):
   path = tmp_path / 'grid.txt'
   path.write_text(''.join(f'1.obj 0.1 0.2 0.3 {-0.5 + 0.057 * i:.3f} {0.057 * j:.3f} 0.026 0 0 0\n'
                           for i in range(2) for j in range(3)))
-  env = Tabletop(resolve('default', ['scene.pool=cube:6,arch:6', 'env.num_objects=6']))
+  env = Tabletop(resolve('default', ['scene.pool=cube:6,arch:6', 'env.num_objects=6']).tabletop)
   theirs = read_case(path, blocks='mvcoba')
   assert [o.shape for o in theirs.objects] == ['cube'] * 6
   assert overlaps(theirs, env) == []

@@ -85,7 +85,7 @@ def test_a_new_rule_reaches_the_exported_graph_and_one_it_cannot_trace_is_refuse
     model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
     session = ort.InferenceSession(export.onnx_model(config, model).SerializeToString(),
                                    providers=['CPUExecutionProvider'])
-    side = perception.grid_size(config)
+    side = perception.grid_size(config.perception, config.scene)
     color = jax.random.uniform(jax.random.PRNGKey(1), (1, 2, side, side, 3))
     depth = jax.random.uniform(jax.random.PRNGKey(2), (1, 2, side, side)) * 0.05
     action, value = session.run(['action', 'value'], {

@@ -33,7 +33,7 @@ def shipped():
 @pytest.fixture(scope='module')
 def training():
   """Occluder poses of 4096 training drops with every drop occluded, as `reset` draws them."""
-  env = Tabletop(resolve('tiny', ['env.occluded_share=1']))
+  env = Tabletop(resolve('tiny', ['env.occluded_share=1']).tabletop)
   keys = jax.random.split(jax.random.PRNGKey(0), 4096)
   pos, quat = jax.jit(jax.vmap(env.drawn_occluders))(keys)
   pos, quat = np.asarray(pos), np.asarray(quat)

@@ -30,7 +30,8 @@ def saved(tmp_path_factory):
   folder = tmp_path_factory.mktemp('exported')
   flat = policy.flat_params(nnx.merge(trainer.graphdef, params))
   np.savez(folder / 'params.npz', **flat)
-  (folder / 'model.json').write_text(json.dumps(export.describe(config, flat, 8, workdir)))
+  described = export.describe(config, trainer.method, flat, 8, workdir)
+  (folder / 'model.json').write_text(json.dumps(described))
   return workdir, folder, state
 
 

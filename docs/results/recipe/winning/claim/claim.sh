@@ -5,7 +5,7 @@
 # the joined tables beside the 5-seed reproduction. Resumable. From /work/study-tree.
 set -u
 variant=$1
-cd /work/study-tree && . .venv/bin/activate
+cd /work/study-tree && . .venv/bin/activate && export PYTHONPATH=/work/study-tree
 args=$(python -c "import sys; sys.path.insert(0, 'experiments'); import recipe_study as r; print(' '.join(r.VARIANTS['$variant']))") || exit 1
 [ -n "$args" ] || { echo "no arguments for $variant"; exit 1; }
 echo "$variant: mvcoba-train $args"
