@@ -43,11 +43,13 @@ class SimulatedRig(Rig):
     from mvcoba_jax.sim.primitives import Action as SimAction  # noqa: PLC0415
     from mvcoba_jax.sim.tabletop import Tabletop  # noqa: PLC0415
     self.jax, self.cameras, self.sim_action = jax, cameras, SimAction
-    self.env = Tabletop(config_lib.from_dict(model['config']).tabletop)
+    config = config_lib.from_dict(model['config'])
+    self.env = Tabletop(config.tabletop)
     self.state = jax.jit(self.env.reset)(jax.random.PRNGKey(seed))
     self.render = jax.jit(lambda s: cameras.render(self.env, s))
     self.step = jax.jit(self.env.step)
-    self.calibration = cameras.calibration(self.env)  # base frame = workspace frame
+    # base frame = workspace frame
+    self.calibration = cameras.calibration(self.env, config.perception.heightmap_resolution)
 
   def capture(self):
     images = self.render(self.state)

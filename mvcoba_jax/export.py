@@ -31,7 +31,8 @@ from mvcoba_jax import folders, methods, perception
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Config
 from mvcoba_jax.learner import agent, networks
-from mvcoba_jax.deploy.model_file import FORMAT
+from mvcoba_jax.deploy import model_file
+from mvcoba_jax.deploy.heightmaps import BELOW_TABLE, HEIGHT_UNIT
 from mvcoba_jax.policy import PolicyError, fingerprint, flat_params, load
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.sim.primitives import GRASP, PUSH
@@ -99,12 +100,12 @@ def describe(config: Config, method: methods.Method, params: dict[str, np.ndarra
              workdir, commit: str | None = None, measured: dict | None = None) -> dict:
   """The content of model.json of a network of `method` trained in `config`; `commit` names the
   code that trained it when known, `measured` is `figures`' answer."""
-  side, k = perception.grid_size(config.perception, config.scene), config.env.num_rotations
+  spec = model_file_of(config, method)
+  side, k, num_views = spec.grid_size, spec.num_rotations, spec.num_views
   suppress = agent.suppresses(method, config)
-  views, num_views = method.views, len(config.scene.cameras)
-  res, half = config.perception.heightmap_resolution, config.scene.workspace_half
-  return {
-      'format': FORMAT,
+  half = spec.workspace_half_m
+  described = {
+      'format': model_file.FORMAT,
       'source': {'workdir': str(pathlib.Path(workdir).resolve()), 'checkpoint_step': step,
                  'seed': config.seed, 'commit': commit},
       'figures': measured or {},
@@ -115,17 +116,14 @@ def describe(config: Config, method: methods.Method, params: dict[str, np.ndarra
                  'arrays': {n: {'shape': list(a.shape), 'dtype': str(a.dtype)}
                             for n, a in params.items()},
                  'naming': 'the Flax NNX state path joined by "/" (list indices as numbers)'},
-      'primitives': {'push': PUSH, 'grasp': GRASP},
       'no_action': networks.NO_ACTION,
       'action_rule': action_rule(method, suppress),
-      'rotations': {'num_rotations': k,
-                    'angles_rad': rotation_angle(np.arange(k), k).tolist(),
-                    'formula': 'angle(k) = k * 2 * pi / num_rotations',
+      'rotations': {'formula': 'angle(k) = k * 2 * pi / num_rotations',
                     'meaning': ('rotation index k: the yaw of the gripper and the push '
                                 'direction, counter-clockwise from +x (col) towards +y (row)')},
-      'heightmap': {'resolution_m': res, 'grid_size': side, 'workspace_half_m': half,
-                    'workspace_bounds_m': {'x': [-half, half], 'y': [-half, half]},
-                    'num_views': num_views, 'views_used': list(views)},
+      'heightmap': {'workspace_bounds_m': {'x': [-half, half], 'y': [-half, half]},
+                    'height_meaning': ('heights in steps of height_unit_m; points below '
+                                       'below_table_m are not the table\'s and are dropped')},
       'pixel_to_world': {'x': 'x = -workspace_half_m + (col + 0.5) * resolution_m',
                          'y': 'y = -workspace_half_m + (row + 0.5) * resolution_m',
                          'z': 'z = max over views_used of depth[view, row, col]',
@@ -133,7 +131,7 @@ def describe(config: Config, method: methods.Method, params: dict[str, np.ndarra
       'input_normalisation': {**networks.INPUT_NORMALISATION,
                               'where': 'inside the ONNX graph, after the rotation'},
       'onnx': {
-          'file': 'model.onnx', 'opset': ONNX_OPSET, 'converter': 'jax2onnx',
+          'opset': ONNX_OPSET, 'converter': 'jax2onnx',
           'inputs': [
               {'name': 'color', 'shape': [1, num_views, side, side, 3], 'dtype': 'float32',
                'meaning': 'colour heightmaps of every camera view, RGB in 0..1, [0, view, '
@@ -170,6 +168,37 @@ def describe(config: Config, method: methods.Method, params: dict[str, np.ndarra
                                   '(config.perception.fill_unseen)']
                                  if config.perception.fill_unseen else [])},
   }
+  return _merged(described, model_file.as_json(spec))
+
+
+def model_file_of(config: Config, method: methods.Method) -> model_file.ModelFile:
+  """What a runtime acting on an export of a `method` network trained in `config` reads from its
+  model.json (`deploy.model_file`: written and read through the same fields)."""
+  k = config.env.num_rotations
+  p = config.perception
+  return model_file.ModelFile(
+      graph_decides=True, push=PUSH, grasp=GRASP, num_rotations=k,
+      angles_rad=tuple(rotation_angle(np.arange(k), k).tolist()),
+      resolution_m=p.heightmap_resolution, grid_size=perception.grid_size(p, config.scene),
+      workspace_half_m=config.scene.workspace_half, num_views=len(config.scene.cameras),
+      views_used=method.views, height_unit_m=HEIGHT_UNIT, below_table_m=BELOW_TABLE,
+      onnx_file='model.onnx', change_min=p.change_min, change_max=p.change_max,
+      change_area=p.change_area, failed_grasp_changes=p.failed_grasp_changes,
+      fill_unseen=p.fill_unseen)
+
+
+def _merged(described: dict, fields: dict) -> dict:
+  """`described` with the contract's `fields` set in their sections; a field it already holds
+  must have the same value (the config's perception settings are both)."""
+  out = dict(described)
+  for key, value in fields.items():
+    if isinstance(value, dict):
+      out[key] = _merged(out.get(key, {}), value)
+    elif key in out and out[key] != value:
+      raise RuntimeError(f'model.json: {key} written twice, {out[key]!r} and {value!r}')
+    else:
+      out[key] = value
+  return out
 
 
 def figures(results, model: networks.QNetwork) -> dict:

@@ -1,7 +1,7 @@
 """model.json, the contract between an export and a runtime: every field an action depends on,
 read once, typed and checked when an export is opened, so a damaged or hand-edited file is
 refused with one line naming the field instead of acting wrongly later. Pure Python (the deploy
-path reads it without JAX); `export.describe` writes it, `policy.load_exported` and
+path reads it without JAX); `export.describe` writes it (`as_json`), `policy.load_exported` and
 `deploy.OnnxPolicy` open it through `read`.
 """
 from __future__ import annotations
@@ -12,6 +12,7 @@ import math
 import pathlib
 
 from mvcoba_jax.deploy.calibration import DeployError
+from mvcoba_jax.deploy.heightmaps import BELOW_TABLE, HEIGHT_UNIT
 
 FORMAT = 'mvcoba-jax-export/2'  # what export writes: the graph outputs the action
 # Format 1's graph stopped at the maps and left the rule to the runtime: its parameters still
@@ -22,28 +23,69 @@ FORMATS = (FORMAT, 'mvcoba-jax-export/1')
 @dataclasses.dataclass(frozen=True)
 class ModelFile:
   """What acting on an export needs from its model.json, checked."""
-  raw: dict  # the whole file, for what no action depends on (figures, source, names)
   graph_decides: bool  # the ONNX graph outputs the action (format 2)
   push: int
   grasp: int
+  num_rotations: int
   angles_rad: tuple[float, ...]
   resolution_m: float
   grid_size: int
   workspace_half_m: float
   num_views: int
   views_used: tuple[int, ...]
-  onnx_file: pathlib.Path  # inside the folder; absent from a shipped policy without its graph
+  height_unit_m: float  # heights are kept in steps of this (the heightmaps' unit)
+  below_table_m: float  # points lower than this are not the table's
+  onnx_file: str  # the graph's file name, inside the export's folder
   change_min: float
   change_max: float
   change_area: float
-  failed_grasp_changes: bool  # False: a grasp that held nothing is no change (absent: True)
-  fill_unseen: bool  # each view's unseen cells filled from the others first (absent: False)
+  failed_grasp_changes: bool  # False: a grasp that held nothing is no change
+  fill_unseen: bool  # each view's unseen cells filled from the others first
+  raw: dict | None = dataclasses.field(default=None, compare=False)  # the whole file as read
+
+
+# Where model.json holds each field of `ModelFile`, its JSON type and range, and the value a file
+# written before the field existed means: `read` and `as_json` both go through this one table.
+FIELDS = {
+    'push': ('primitives.push', int, (0, 1)),
+    'grasp': ('primitives.grasp', int, (0, 1)),
+    'num_rotations': ('rotations.num_rotations', int, (1, 64)),
+    'angles_rad': ('rotations.angles_rad', list, None),
+    'resolution_m': ('heightmap.resolution_m', float, (1e-4, 0.05)),
+    'workspace_half_m': ('heightmap.workspace_half_m', float, (0.01, 2.0)),
+    'grid_size': ('heightmap.grid_size', int, (1, 4096)),
+    'num_views': ('heightmap.num_views', int, (1, 16)),
+    'views_used': ('heightmap.views_used', list, None),
+    'height_unit_m': ('heightmap.height_unit_m', float, (1e-7, 1e-2)),
+    'below_table_m': ('heightmap.below_table_m', float, (-0.1, 0.0)),
+    'onnx_file': ('onnx.file', str, None),
+    'change_min': ('config.perception.change_min', float, (0.0, 1.0)),
+    'change_max': ('config.perception.change_max', float, (0.0, 1.0)),
+    'change_area': ('config.perception.change_area', float, (0.0, 1.0)),
+    'failed_grasp_changes': ('config.perception.failed_grasp_changes', bool, None),
+    'fill_unseen': ('config.perception.fill_unseen', bool, None),
+}
+ABSENT = {'height_unit_m': HEIGHT_UNIT, 'below_table_m': BELOW_TABLE,
+          'failed_grasp_changes': True, 'fill_unseen': False}
+
+
+def as_json(spec: ModelFile) -> dict:
+  """`spec`'s fields as model.json nests them (`FIELDS`): what `export.describe` writes."""
+  out = {'format': FORMAT if spec.graph_decides else FORMATS[1]}
+  for name, (dotted, _, _) in FIELDS.items():
+    *parents, key = dotted.split('.')
+    section = out
+    for part in parents:
+      section = section.setdefault(part, {})
+    value = getattr(spec, name)
+    section[key] = list(value) if isinstance(value, tuple) else value
+  return out
 
 
 def read(folder) -> ModelFile:
   """The checked model.json of an export folder; DeployError naming the file, the field and the
   problem, for the first field that is missing, mistyped or out of range, an unknown format,
-  or an ONNX file outside the folder."""
+  a heightmap unit or floor this runtime does not make, or an ONNX file outside the folder."""
   folder = pathlib.Path(folder)
   path = folder / 'model.json'
   try:
@@ -55,46 +97,37 @@ def read(folder) -> ModelFile:
   if fmt not in FORMATS:
     raise DeployError(f'{path}: format {fmt!r}: this runtime reads {", ".join(FORMATS)} '
                       '(another version of mvcoba_jax wrote it)')
-  push = field.get('primitives.push', int, (0, 1))
-  grasp = field.get('primitives.grasp', int, (0, 1))
-  if push == grasp:
-    raise DeployError(f'{path}: primitives.push and primitives.grasp are both {push}')
-  k = field.get('rotations.num_rotations', int, (1, 64))
-  angles = field.get('rotations.angles_rad', list)
-  if len(angles) != k or not all(_real(a) for a in angles):
-    raise DeployError(f'{path}: rotations.angles_rad: {k} finite numbers expected')
-  res = field.get('heightmap.resolution_m', float, (1e-4, 0.05))
-  half = field.get('heightmap.workspace_half_m', float, (0.01, 2.0))
-  side = field.get('heightmap.grid_size', int, (1, 4096))
+  got = {name: field.get(dotted, kind, bounds, ABSENT.get(name, _REQUIRED))
+         for name, (dotted, kind, bounds) in FIELDS.items()}
+  if got['push'] == got['grasp']:
+    raise DeployError(f'{path}: primitives.push and primitives.grasp are both {got["push"]}')
+  angles = got['angles_rad']
+  if len(angles) != got['num_rotations'] or not all(_real(a) for a in angles):
+    raise DeployError(f'{path}: rotations.angles_rad: {got["num_rotations"]} finite numbers '
+                      'expected')
+  res, half, side = got['resolution_m'], got['workspace_half_m'], got['grid_size']
   if side != round(2 * half / res):
     raise DeployError(f'{path}: heightmap.grid_size {side} is not 2 x '
                       f'heightmap.workspace_half_m / heightmap.resolution_m = {2 * half / res:g}')
-  views = field.get('heightmap.num_views', int, (1, 16))
-  used = field.get('heightmap.views_used', list)
+  views, used = got['num_views'], got['views_used']
   if not used or not all(type(v) is int and 0 <= v < views for v in used) or len(
       set(used)) != len(used):
     raise DeployError(f'{path}: heightmap.views_used {str(used)[:60]}: distinct view indices '
                       f'below heightmap.num_views ({views}) expected')
-  onnx_name = field.get('onnx.file', str)
-  onnx_file = (folder / onnx_name).resolve()
-  if onnx_file.parent != folder.resolve():
-    raise DeployError(f'{path}: onnx.file {onnx_name!r} lies outside the export\'s folder')
-  change = {name: field.get(f'config.perception.{name}', float, (0.0, 1.0))
-            for name in ('change_min', 'change_max', 'change_area')}
+  for name, own in (('height_unit_m', HEIGHT_UNIT), ('below_table_m', BELOW_TABLE)):
+    if abs(got[name] - own) > 1e-12:
+      raise DeployError(f'{path}: {FIELDS[name][0]} {got[name]!r}: this runtime\'s heightmaps '
+                        f'use {own!r} (another version of mvcoba_jax wrote it)')
+  if (folder / got['onnx_file']).resolve().parent != folder.resolve():
+    raise DeployError(f'{path}: onnx.file {got["onnx_file"]!r} lies outside the export\'s folder')
   if abs(field.get('config.perception.heightmap_resolution', float, (1e-4, 0.05)) - res) > 1e-12:
     raise DeployError(f'{path}: config.perception.heightmap_resolution is not '
                       'heightmap.resolution_m')
-  perception = raw['config']['perception']
-  flags = {name: perception.get(name, default) for name, default in
-           (('failed_grasp_changes', True), ('fill_unseen', False))}
-  for name, value in flags.items():
-    if type(value) is not bool:
-      raise DeployError(f'{path}: config.perception.{name} {str(value)[:40]!r}: true or false '
-                        'expected')
-  return ModelFile(raw=raw, graph_decides=fmt == FORMAT, push=push, grasp=grasp, **flags,
-                   angles_rad=tuple(float(a) for a in angles), resolution_m=res, grid_size=side,
-                   workspace_half_m=half, num_views=views, views_used=tuple(used),
-                   onnx_file=onnx_file, **change)
+  return ModelFile(**{**got, 'angles_rad': tuple(float(a) for a in angles),
+                      'views_used': tuple(used)}, graph_decides=fmt == FORMAT, raw=raw)
+
+
+_REQUIRED = object()
 
 
 class _Fields:
@@ -103,10 +136,13 @@ class _Fields:
   def __init__(self, raw, path: pathlib.Path):
     self.raw, self.path = raw, path
 
-  def get(self, dotted: str, kind: type, bounds: tuple | None = None):
+  def get(self, dotted: str, kind: type, bounds: tuple | None = None, absent=_REQUIRED):
+    """The field's value; `absent`, where given, for a field the file does not hold."""
     value = self.raw
     for key in dotted.split('.'):
       if not isinstance(value, dict) or key not in value:
+        if absent is not _REQUIRED:
+          return absent
         raise DeployError(f'{self.path}: {dotted} is missing')
       value = value[key]
     if kind is float and _real(value):

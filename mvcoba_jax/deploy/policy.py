@@ -39,7 +39,7 @@ class OnnxPolicy:
                         'leaves the action rule to the runtime; export it again '
                         f'(mvcoba-export --checkpoint {folder} --out NEW_FOLDER)')
     self.model = self.spec.raw
-    onnx_file = self.spec.onnx_file
+    onnx_file = folder / self.spec.onnx_file
     options = ort.SessionOptions()
     options.log_severity_level = 3  # the converter's loose shape annotations only warn
     try:

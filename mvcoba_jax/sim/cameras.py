@@ -61,10 +61,10 @@ def world_rays(mj_model: mujoco.MjModel, cams) -> tuple[np.ndarray, np.ndarray]:
   return np.concatenate(origins), np.concatenate(directions)
 
 
-def calibration(env) -> dict:
-  """The simulator's cameras as `mvcoba_jax.deploy` reads a lab's calibration file: OpenCV
-  intrinsics (pixel centres at integers), each camera's pose in the world (which is the
-  workspace frame, so the base frame here), depth in metres."""
+def calibration(env, resolution: float) -> dict:
+  """The simulator's cameras as `mvcoba_jax.deploy` reads a lab's calibration file, for
+  heightmaps of `resolution` m: OpenCV intrinsics (pixel centres at integers), each camera's
+  pose in the world (which is the workspace frame, so the base frame here), depth in metres."""
   data = mujoco.MjData(env.scene.mj_model)
   mujoco.mj_kinematics(env.scene.mj_model, data)
   mujoco.mj_camlight(env.scene.mj_model, data)
@@ -79,7 +79,7 @@ def calibration(env) -> dict:
                  'camera_to_base': pose.tolist(), 'depth_scale': 1.0})
   return {'workspace': {'center': [0.0, 0.0, 0.0], 'yaw_deg': 0.0,
                         'half': config.scene.workspace_half, 'top': config.scene.workspace_top,
-                        'resolution': config.perception.heightmap_resolution},
+                        'resolution': resolution},
           'cameras': cams}
 
 

@@ -36,6 +36,22 @@ CONSTRAINT_ROWS = 4  # per contact: a pyramidal cone of condim 3 has 2 * (3 - 1)
 EXTRA_ROWS = 16  # joint limits and the like, per world
 
 
+# mujoco-mjx 4.0 keeps what only its Warp implementation has (the overflow warning switch, the
+# rows and contacts a step filled) in the private `_impl` of its Model and Data, with no public
+# accessor: these two functions are the only places this project reads or writes it.
+def _quiet(model: mjx.Model) -> mjx.Model:
+  """`model` with Warp's overflow messages off (it prints them on stdout, where scripts print
+  JSON; overflows are caught from the fill counts and reported not ok instead)."""
+  impl = model.opt._impl  # pylint: disable=protected-access
+  return model.replace(opt=model.opt.replace(_impl=impl.replace(warn_overflow=0)))
+
+
+def _filled(data: mjx.Data):
+  """(constraint rows, contacts) the last step of this world filled."""
+  impl = data._impl  # pylint: disable=protected-access
+  return impl.nefc, impl.nacon
+
+
 def batched(fn):
   """A per-example function from `fn`, a function of arrays with a leading batch axis (and of
   them only): under any number of vmaps `fn` is called once, on every example flattened into one
@@ -77,11 +93,7 @@ class WarpPhysics:
   def __init__(self, scene: Scene, parking: Parking):
     m = scene.mj_model
     self._mj_model = m
-    model = mjx.put_model(m, impl='warp')
-    # Warp prints overflows and solver iteration limits on stdout, where scripts print JSON:
-    # off. Contacts and constraints that overflow are caught below and reported not ok.
-    self.model = model.replace(opt=model.opt.replace(
-        _impl=model.opt._impl.replace(warn_overflow=0)))  # pylint: disable=protected-access
+    self.model = _quiet(mjx.put_model(m, impl='warp'))
     self._parking = parking
     self._cameras = scene.config.cameras
     self._contacts = scene.config.max_contact_points
@@ -135,16 +147,15 @@ class WarpPhysics:
     template = self._template(qpos.shape[0])
     pin = self._parking.pin
 
-    fill = lambda d: (d._impl.nefc, d._impl.nacon)  # pylint: disable=protected-access
 
     def world(qp, qv, mp, mq, pk, c):
       d, at, (nefc, nacon) = stepped(self.model, self._data(template, qp, qv, mp, mq), c, pin,
-                                     pk, frames, fill)
+                                     pk, frames, _filled)
       return d.qpos, d.qvel, jnp.max(nefc), jnp.max(nacon), at
 
     qpos, qvel, nefc, nacon, at = jax.vmap(world)(qpos, qvel, mocap_pos, mocap_quat, parked, ctrl)
     ok = ((nefc < CONSTRAINT_ROWS * self._contacts + EXTRA_ROWS)
-          & (nacon < template._impl.naconmax))  # pylint: disable=protected-access
+          & (nacon < qpos.shape[0] * self._contacts))  # the arena `_template` made
     return qpos, qvel, ok, at
 
   def cast(self, sim: SimState, origins: np.ndarray, directions: np.ndarray):

@@ -15,12 +15,14 @@ import numpy as np
 import pytest
 
 from mvcoba_jax import export, policy
+from mvcoba_jax.config import resolve
 from mvcoba_jax.deploy import (DeployError, OnnxPolicy, calibration_from_dict, heightmaps,
                                read_color, read_depth)
 from mvcoba_jax.sim import cameras
 from tests.helpers import make_env, make_task
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
+RESOLUTION = resolve('default').perception.heightmap_resolution  # the reproduction's too
 # jax2onnx's GroupNorm plugin reads Variable.value, which Flax deprecates.
 pytestmark = pytest.mark.filterwarnings('ignore::DeprecationWarning:jax2onnx')
 
@@ -39,7 +41,7 @@ def scenes():
 def calibration(env, base_from_workspace=np.eye(4), yaw_deg=0.0) -> dict:
   """The simulator's calibration (`cameras.calibration`) with its workspace placed in a base
   frame by `base_from_workspace` (4x4, turned by `yaw_deg`), depth in millimetres."""
-  data = cameras.calibration(env)
+  data = cameras.calibration(env, RESOLUTION)
   for cam in data['cameras']:
     cam['camera_to_base'] = (base_from_workspace @ np.asarray(cam['camera_to_base'])).tolist()
     cam['depth_scale'] = 0.001

@@ -290,7 +290,8 @@ def test_a_policy_that_fills_unseen_cells_acts_alike_in_jax_and_deploy(tmp_path)
   seen = np.ones((2, side, side), bool)
   seen[0, :, side // 2:] = False  # camera 0 blind to half the table
   depth[0][~seen[0]], color[0][~seen[0]] = 0.0, 0.0
-  cal = calibration_from_dict(cameras.calibration(trainer.task.env))
+  cal = calibration_from_dict(cameras.calibration(trainer.task.env,
+                                                   trainer.config.perception.heightmap_resolution))
   filled_color, filled_depth = filled(color, depth, seen)
   assert (filled_depth[0] == depth[1]).all()  # camera 1 saw all: camera 0 takes its heights
   for changed in (True, False):

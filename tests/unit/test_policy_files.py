@@ -191,3 +191,30 @@ def test_fuzzed_model_json_loads_or_is_refused_naming_it(saved, tmp_path):
       refused += 1
       assert str(target / 'model.json') in str(e) or str(target / 'params.npz') in str(e), str(e)
   assert refused > 20
+
+
+def test_model_json_is_written_and_read_through_one_schema(saved, tmp_path):
+  """What `export.describe` wrote reads back (`deploy.model_file.read`) as the fields it was
+  written from, every one; a heightmap unit or floor other than the one this runtime's
+  heightmaps use is refused naming the field."""
+  from mvcoba_jax.deploy import DeployError, model_file
+  _, folder, _ = saved
+  config = resolve('tiny')
+  written = export.model_file_of(config, Trainer(config).method)
+  assert model_file.read(folder) == written
+  assert written.height_unit_m == 1e-5 and written.below_table_m == -0.005
+  for dotted, value in (('height_unit_m', 1e-3), ('below_table_m', -0.05)):
+    target = _copy(folder, tmp_path / dotted)
+    described = json.loads((target / 'model.json').read_text())
+    described['heightmap'][dotted] = value
+    (target / 'model.json').write_text(json.dumps(described))
+    with pytest.raises(DeployError, match=f'heightmap.{dotted} {value!r}: this runtime'):
+      model_file.read(target)
+
+
+def test_a_tabletop_takes_the_scene_and_episode_alone():
+  """`Tabletop` is built from `config.tabletop`; handed the whole config it refuses, before
+  building anything, so nothing in the simulator reads perception or training settings."""
+  from mvcoba_jax.sim.tabletop import Tabletop
+  with pytest.raises(TypeError, match='TabletopConfig'):
+    Tabletop(resolve('tiny'))
