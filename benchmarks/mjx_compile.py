@@ -1,8 +1,9 @@
 """Where MJX's compile time goes: each part of the training step compiled alone at B tabletops
 (issue 69): the primitive's physics (`Tabletop.step`, one scan of MJX steps), a fresh drop
 (`Tabletop.reset`: the drop's settling scan), both cameras' rays and heightmaps
-(`task.observe`), on the backend asked for, each with its compile time (lower + compile) and one
-run after it. Prints one JSON object.
+(`Task.observe`), and the reset and the step in one program (`reset_and_step`: what the training
+step holds), on the backend asked for, each with its tracing and lowering time, XLA's compile time
+and one run after it. Prints one JSON object.
 
   python benchmarks/mjx_compile.py [--config default] [--backend mjx] [--batch 8]
 """
@@ -21,13 +22,17 @@ from mvcoba_jax.learner.task import Task
 
 
 def compiled(fn, *args) -> dict:
-  """Compile seconds (lower + compile) and the seconds of one run after it."""
+  """Seconds to trace and lower, to compile, and of one run after it."""
   start = time.perf_counter()
-  program = jax.jit(fn).lower(*args).compile()
+  lowered = jax.jit(fn).lower(*args)
+  lower_s = time.perf_counter() - start
+  start = time.perf_counter()
+  program = lowered.compile()
   compile_s = time.perf_counter() - start
   start = time.perf_counter()
   out = jax.block_until_ready(program(*args))
-  return {'compile_s': round(compile_s, 2), 'run_s': round(time.perf_counter() - start, 3)}, out
+  return {'lower_s': round(lower_s, 2), 'compile_s': round(compile_s, 2),
+          'run_s': round(time.perf_counter() - start, 3)}, out
 
 
 def main(argv=None) -> int:
@@ -49,6 +54,8 @@ def main(argv=None) -> int:
                               methods.get(config.network.method))
   action = task.to_world(pick, obs.depth)
   row['step'], _ = compiled(jax.vmap(env.step), states, action)
+  row['reset_and_step'], _ = compiled(
+      lambda k, s, a: (jax.vmap(env.reset)(k), jax.vmap(env.step)(s, a)), keys, states, action)
   print(json.dumps(row, indent=1))
   return 0
 
