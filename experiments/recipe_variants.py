@@ -68,6 +68,9 @@ VARIANTS = {
     # The combination with pushes kept from heading over the border: its lost objects left
     # mostly during pushes.
     'push_room': COMBINATION + ['--set', 'network.push_room=0.15'],
+    # The combination with a quarter of its training drops packed (the generator's own rows, as
+    # `packed` from an older recipe): pushing taught where packed blocks need it.
+    'packed_combination': COMBINATION + ['--set', 'env.packed_share=0.25'],
 }
 # variant -> the variant whose finished run it resumes to more actions. The same as training
 # that long in one go: nothing in the recipe reads the total (constant learning rate, exploration
