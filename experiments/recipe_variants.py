@@ -71,6 +71,9 @@ VARIANTS = {
     # The combination with a quarter of its training drops packed (the generator's own rows, as
     # `packed` from an older recipe): pushing taught where packed blocks need it.
     'packed_combination': COMBINATION + ['--set', 'env.packed_share=0.25'],
+    # The combination paying -0.5 for each object an action sends out of the workspace: its heap
+    # runs fail to clear by losing objects, mostly neighbours of a push, which no rule sees.
+    'lost_penalty': COMBINATION + ['--set', 'train.lost_object_reward=-0.5'],
 }
 # variant -> the variant whose finished run it resumes to more actions. The same as training
 # that long in one go: nothing in the recipe reads the total (constant learning rate, exploration

@@ -56,7 +56,7 @@ RETIRED = {TrainConfig: ('max_consecutive_failures',)}
 LEGACY = {TrainConfig: {'target': 'network', 'failed_grasp_reward': 0.5,
                         'no_change_push_reward': 0.0, 'bootstrap_no_change': True,
                         'future_max': 'rule', 'grasp_symmetry': False, 'fresh_in_batch': False,
-                        'quarter_turns': False, 'replay_ratio': 0.0},
+                        'quarter_turns': False, 'replay_ratio': 0.0, 'lost_object_reward': 0.0},
           EnvConfig: {'drop': 'spread', 'heap_half': 0.125, 'occluded_share': 0.0,
                       'packed_share': 0.0},
           NetworkConfig: {'pad_to_diagonal': False, 'shared_stages': 0, 'suppress': False,

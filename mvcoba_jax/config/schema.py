@@ -125,8 +125,11 @@ class TrainConfig:
   # Beyond both: `quarter_turns` turns each replayed transition (states and action) by a random
   # multiple of 90 degrees about the heightmap centre, teaching a network whose early stages see
   # the state unturned (`network.shared_stages`) the symmetry that turned heightmaps build in.
+  # `lost_object_reward` is added for each object that leaves the workspace during the action (0:
+  # the paper's and the authors' rewards, which do not see losses).
   failed_grasp_reward: float = 0.5
   no_change_push_reward: float = 0.0
+  lost_object_reward: float = 0.0
   bootstrap_no_change: bool = True
   future_max: str = 'rule'
   grasp_symmetry: bool = False
@@ -147,7 +150,8 @@ class TrainConfig:
         'priority_exponent': Between(0, 10),
         'target_update_period': Between(1, 10 ** 9), 'target': TARGETS,
         'checkpoint_every': Between(1, 10 ** 9), 'failed_grasp_reward': Between(-1, 1),
-        'no_change_push_reward': Between(-1, 1), 'future_max': FUTURE_MAX,
+        'no_change_push_reward': Between(-1, 1), 'lost_object_reward': Between(-1, 0),
+        'future_max': FUTURE_MAX,
         'curve_window': Between(1, 10 ** 7)})
 
 

@@ -120,23 +120,26 @@ def to_world(action: PixelAction, depth, views: tuple[int, ...], resolution: flo
 class Reward:
   """What an action earns: 1 for a grasp that lifts an object, `failed_grasp` for one that failed
   but changed the scene (else 0), 0.5 for a push that changed it, `no_change_push` for one that
-  did not; `bootstrap_no_change`: whether an action that changed nothing bootstraps its target.
+  did not, plus `lost_object` for each object that left the workspace during it;
+  `bootstrap_no_change`: whether an action that changed nothing bootstraps its target.
   Training's settings (`of`), which an online evaluation learns under too."""
   failed_grasp: float
   no_change_push: float
+  lost_object: float
   bootstrap_no_change: bool
 
   @classmethod
   def of(cls, train: TrainConfig) -> Reward:
     return cls(failed_grasp=train.failed_grasp_reward, no_change_push=train.no_change_push_reward,
+               lost_object=train.lost_object_reward,
                bootstrap_no_change=train.bootstrap_no_change)
 
 
-def reward(primitive, grasp_success, changed, paid: Reward):
-  """Each action's reward (B,) as `paid` says."""
+def reward(primitive, grasp_success, changed, lost, paid: Reward):
+  """Each action's reward (B,) as `paid` says; `lost`: the objects that left the workspace."""
   grasp_reward = jnp.where(grasp_success, 1.0, jnp.where(changed, paid.failed_grasp, 0.0))
   push_reward = jnp.where(changed, 0.5, paid.no_change_push)
-  return jnp.where(primitive == GRASP, grasp_reward, push_reward)
+  return jnp.where(primitive == GRASP, grasp_reward, push_reward) + paid.lost_object * lost
 
 
 def failed(primitive, grasp_success, changed):

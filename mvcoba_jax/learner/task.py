@@ -104,7 +104,8 @@ class Task:
     if not self.perception.failed_grasp_changes:
       changed &= (action.primitive != agent.GRASP) | info.grasp_success
     reward = jnp.where(healthy,
-                       agent.reward(action.primitive, info.grasp_success, changed, self.reward),
+                       agent.reward(action.primitive, info.grasp_success, changed, info.lost,
+                                    self.reward),
                        0.0)
     failures = jnp.where(agent.failed(action.primitive, info.grasp_success, changed),
                          state.failures + 1, 0)

@@ -1,5 +1,7 @@
 """The task step that training and evaluation share: reward, change, failures and episode ends
 from real physics (tiny scene, native backend)."""
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -42,10 +44,15 @@ def test_rewards_failures_and_episode_ends():
   # scene, a push that changes nothing -1), and the paper text's 0.5 for such a grasp.
   authors = agent.Reward.of(resolve('authors').train)
   np.testing.assert_array_equal(np.asarray(agent.reward(
-      action.primitive, out.info.grasp_success, out.changed, authors)), [1.0, 0.0, 0.0, 0.5])
-  assert float(agent.reward(PUSH, False, False, authors)) == -1.0
-  assert float(agent.reward(GRASP, False, True, authors)) == 0.0
-  assert float(agent.reward(GRASP, False, True, task.reward)) == 0.5
+      action.primitive, out.info.grasp_success, out.changed, out.info.lost, authors)),
+      [1.0, 0.0, 0.0, 0.5])
+  assert float(agent.reward(PUSH, False, False, 0, authors)) == -1.0
+  assert float(agent.reward(GRASP, False, True, 0, authors)) == 0.0
+  assert float(agent.reward(GRASP, False, True, 0, task.reward)) == 0.5
+  # `train.lost_object_reward`, per object lost (0 here: the rewards above do not see losses).
+  losing = dataclasses.replace(task.reward, lost_object=-0.25)
+  assert float(agent.reward(PUSH, False, True, 2, losing)) == 0.0
+  assert float(agent.reward(GRASP, True, True, 1, losing)) == 0.75
   np.testing.assert_array_equal(np.asarray(out.changed), [True, False, False, True])
   np.testing.assert_array_equal(np.asarray(out.failures), [0, 3, 1, 0])
   np.testing.assert_array_equal(np.asarray(out.cleared), [True, False, False, False])

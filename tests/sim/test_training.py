@@ -393,7 +393,7 @@ def test_authors_recipe_on_real_transitions():
   log = jax.tree.map(lambda *x: np.concatenate(x) if np.ndim(x[0]) else np.stack(x), *logs[:5])
   np.testing.assert_array_equal(data.primitive, log.primitive)
   np.testing.assert_array_equal(data.reward, np.asarray(agent.reward(
-      log.primitive, log.grasp_success, log.changed, trainer.task.reward)))
+      log.primitive, log.grasp_success, log.changed, log.lost, trainer.task.reward)))
   assert set(data.reward[log.primitive == agent.GRASP]) <= {0.0, 1.0}
   assert set(data.reward[log.primitive == agent.PUSH]) <= {-1.0, 0.5}
   np.testing.assert_array_equal(data.done, ~log.changed)  # no future where nothing changed
