@@ -24,8 +24,8 @@ from mvcoba_jax.config import Config
 from mvcoba_jax.evaluation.metrics import RunLog
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.learner import replay as replay_lib
-from mvcoba_jax.sim.geometry import pixel_to_world
 from mvcoba_jax.learner.task import Outcome, State, Task
+from mvcoba_jax.sim.geometry import pixel_to_world
 from mvcoba_jax.sim.tabletop import Layout, where_envs
 from mvcoba_jax.suites.cases import start
 
@@ -125,7 +125,6 @@ class Online(Actor):
     self.graphdef, self.params = nnx.split(model)
     self.config = config
     self.method = model.method
-    self.views = self.method.views
     self.optimizer = agent.optimizer(config.train)
 
   def q_maps(self, params, obs: perception.Observation, rotations=None):
