@@ -67,6 +67,7 @@ FIELDS = {
 }
 ABSENT = {'height_unit_m': HEIGHT_UNIT, 'below_table_m': BELOW_TABLE,
           'failed_grasp_changes': True, 'fill_unseen': False}
+_REQUIRED = object()  # a field without a value in ABSENT
 
 
 def as_json(spec: ModelFile) -> dict:
@@ -126,8 +127,6 @@ def read(folder) -> ModelFile:
   return ModelFile(**{**got, 'angles_rad': tuple(float(a) for a in angles),
                       'views_used': tuple(used)}, graph_decides=fmt == FORMAT, raw=raw)
 
-
-_REQUIRED = object()
 
 
 class _Fields:
