@@ -18,9 +18,9 @@ from mvcoba_jax.evaluation import paper, runner
 from mvcoba_jax.evaluation import report as report_lib
 from mvcoba_jax.evaluation import sources as sources_lib
 from mvcoba_jax.evaluation.protocols import FROZEN, PROTOCOLS, Protocol
+from mvcoba_jax.learner.task import Task
 from mvcoba_jax.policy import PolicyError
 from mvcoba_jax.sim.scenarios import MAX_FIT_BOUND, ScenarioError, case_to_layout, stack_layouts
-from mvcoba_jax.learner.task import Task
 from mvcoba_jax.suites import cases as suite_cases
 from mvcoba_jax.suites import loading, suite_files
 
