@@ -97,6 +97,7 @@ class WarpPhysics:
     self._parking = parking
     self._cameras = scene.config.cameras
     self._contacts = scene.config.max_contact_points
+    self._rows = CONSTRAINT_ROWS * self._contacts + EXTRA_ROWS  # each world's constraint rows
     self._origins, self._directions = cameras.world_rays(m, self._cameras)
     self._templates: dict[int, mjx.Data] = {}
     self._contexts: dict[int, object] = {}
@@ -104,12 +105,16 @@ class WarpPhysics:
     self._cast = batched(self._cast_batch)
     self._simulators: dict[tuple[int, ...], object] = {}  # frames -> its batched simulate
 
+  def _arena(self, n: int) -> int:
+    """Contacts the shared arena of `n` worlds holds."""
+    return n * self._contacts
+
   def _template(self, n: int) -> mjx.Data:
     """Data of one world whose shared buffers hold `n` worlds' contacts (made once per n)."""
     if n not in self._templates:
       with jax.ensure_compile_time_eval():  # made while a program traces: concrete, not traced
-        data = mjx.make_data(self._mj_model, impl='warp', naconmax=n * self._contacts,
-                             njmax=CONSTRAINT_ROWS * self._contacts + EXTRA_ROWS)
+        data = mjx.make_data(self._mj_model, impl='warp', naconmax=self._arena(n),
+                             njmax=self._rows)
       # The cameras are fixed in the world: their poses once, from MuJoCo (MJX's camlight is
       # not implemented on Warp).
       host = mujoco.MjData(self._mj_model)
@@ -147,15 +152,13 @@ class WarpPhysics:
     template = self._template(qpos.shape[0])
     pin = self._parking.pin
 
-
     def world(qp, qv, mp, mq, pk, c):
       d, at, (nefc, nacon) = stepped(self.model, self._data(template, qp, qv, mp, mq), c, pin,
                                      pk, frames, _filled)
       return d.qpos, d.qvel, jnp.max(nefc), jnp.max(nacon), at
 
     qpos, qvel, nefc, nacon, at = jax.vmap(world)(qpos, qvel, mocap_pos, mocap_quat, parked, ctrl)
-    ok = ((nefc < CONSTRAINT_ROWS * self._contacts + EXTRA_ROWS)
-          & (nacon < qpos.shape[0] * self._contacts))  # the arena `_template` made
+    ok = (nefc < self._rows) & (nacon < self._arena(qpos.shape[0]))
     return qpos, qvel, ok, at
 
   def cast(self, sim: SimState, origins: np.ndarray, directions: np.ndarray):

@@ -5,11 +5,17 @@ jitted function both scans call, to see whether JAX or XLA then trace or compile
   python docs/results/mjx-compile/shared_body.py          > plain.json
   python docs/results/mjx-compile/shared_body.py shared   > shared.json
 """
-import json, sys, time
-import jax, jax.numpy as jnp
+import json
+import sys
+import time
+
+import jax
+import jax.numpy as jnp
 from mujoco import mjx
+
 from mvcoba_jax import methods
 from mvcoba_jax.config import resolve
+from mvcoba_jax.learner import agent
 from mvcoba_jax.learner.task import Task
 from mvcoba_jax.sim import mjx_physics
 
@@ -37,7 +43,7 @@ q = jnp.zeros((b, 2, config.env.num_rotations, 112, 112))
 def both(keys, states):
   fresh = jax.vmap(env.reset)(keys)
   depth = jnp.zeros((b, 2, 112, 112))
-  pick = jax.tree.map(lambda x: x, __import__('mvcoba_jax.learner.agent', fromlist=['x']).greedy_actions(q, jnp.ones(b, bool), methods.get('mvcoba')))
+  pick = agent.greedy_actions(q, jnp.ones(b, bool), methods.get('mvcoba'))
   out, _ = jax.vmap(env.step)(states, task.to_world(pick, depth))
   return fresh, out
 row = {'shared': shared}
