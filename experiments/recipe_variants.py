@@ -74,6 +74,13 @@ VARIANTS = {
     # The combination paying -0.5 for each object an action sends out of the workspace: its heap
     # runs fail to clear by losing objects, mostly neighbours of a push, which no rule sees.
     'lost_penalty': COMBINATION + ['--set', 'train.lost_object_reward=-0.5'],
+    # The combination trained on denser heaps: 20 objects (twice the paper's 10, from a pool of
+    # twice the slots) dropped over the test heaps' square (`suites.generate.PILE_HALF`), where
+    # the test's 20-40-object heaps reach the border and every loss happened.
+    'dense_heaps': COMBINATION + [
+        '--set', 'scene.pool=cube:4,tall_box:4,flat_box:2,prism:4,arch:4,cylinder:2,disk:2,octagon:2',
+        '--set', 'scene.max_contact_points=240', '--set', 'scene.max_geom_pairs=48',
+        '--set', 'env.num_objects=20', '--set', 'env.heap_half=0.155'],
 }
 # variant -> the variant whose finished run it resumes to more actions. The same as training
 # that long in one go: nothing in the recipe reads the total (constant learning rate, exploration
