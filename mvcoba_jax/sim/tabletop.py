@@ -281,8 +281,14 @@ class Tabletop:
 
   def reset_from_case(self, layout: Layout, key=None) -> EnvState:
     """Places the objects of `layout` (a test case or a random drop) and lets them settle."""
-    state = self.place(layout, key)
-    hold = jnp.broadcast_to(self._gripper_park, (self.config.env.settle_steps, 6))
+    return self.settle(self.place(layout, key))
+
+  def settle(self, state: EnvState, steps: int | None = None) -> EnvState:
+    """`state` after `steps` physics steps (`env.settle_steps` if None) with the gripper parked,
+    the objects coming to rest; those that leave the workspace leave play uncounted (a drop
+    that lands off the table is not a loss)."""
+    steps = self.config.env.settle_steps if steps is None else steps
+    hold = jnp.broadcast_to(self._gripper_park, (steps, 6))
     sim, healthy, _ = self._simulate(state.sim, state.in_play, hold)
     in_play = state.in_play & self._in_workspace(sim)
     return state.replace(sim=self._finish(sim, in_play), in_play=in_play, healthy=healthy)
