@@ -6,7 +6,7 @@ random rotation) under the default preset's script and under the script with `--
 (e.g. `env.lift_height=0.15`). Prints one JSON object: each script's physics steps per grasp, per
 push and per primitive (both run the longer one's count, in lockstep), the share of grasps whose
 success agrees, how far each object in play after both came to rest apart after the pushes
-(`--rest-steps` with the gripper parked; median, p90, max), objects lost, and the wall time of
+(`--rest-steps` with the gripper parked; median, p90, max, the share within 2 cm), objects lost, and the wall time of
 one batched step each (after compiling).
 
   python benchmarks/primitive_steps.py [--batch 128] [--seed 0] [--set KEY=VALUE ...]
@@ -79,6 +79,7 @@ def main():
           'objects_compared_after_pushes': int(gap.size),
           'push_object_gap_m': {'median': float(np.median(gap)),
                                 'p90': float(np.quantile(gap, 0.9)), 'max': float(gap.max())},
+          'push_objects_within_2cm': float((gap <= 0.02).mean()),
           'objects_lost_default': int(np.asarray(info_d.lost).sum()),
           'objects_lost_short': int(np.asarray(info_s.lost).sum()),
           'step_wall_s_default': wall['default'], 'step_wall_s_short': wall['short'],
