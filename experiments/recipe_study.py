@@ -82,7 +82,8 @@ def main(argv=None) -> int:
   parser.add_argument('--workdir', default='runs/recipe')
   parser.add_argument('--suites', nargs='+', default=[str(VALIDATION / s) for s in
                                                       ('val-random', 'val-ordered',
-                                                       'val-occluded', 'val-occluded-high')])
+                                                       'val-occluded', 'val-occluded-high',
+                                                       'val-heaps')])
   parser.add_argument('--landed', help='a landed study folder whose evaluations are done')
   parser.add_argument('--protocol', choices=('frozen', 'online'), default='frozen')
   args = parser.parse_args(argv)

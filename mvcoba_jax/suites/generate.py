@@ -21,7 +21,8 @@ writes validation suites drawn apart from the shipped suites (val-random: heaps 
 val-ordered: packed templates no shipped case holds, a brick bond, a hexagonal packing, staggered
 tall boxes; val-occluded: occluders from `sim/occluders.py`'s validation region, which neither
 training nor the tests use; val-occluded-high: from its high validation region, which hides as
-much as the test's) for choosing training settings, never the shipped suites results
+much as the test's; val-heaps: twice the cases of heaps the test's sizes, 20-40 objects, where
+val-random's 18 runs a seed were too few to rank what loses objects) for choosing training settings, never the shipped suites results
 are reported on. tests/unit/test_validation_cases.py checks that they share no layout
 (`suites/similarity.py`) and no occluder pose with the shipped suites.
 """
@@ -81,7 +82,7 @@ def random_case(n: int, seed: int, skip: frozenset = frozenset(),
   the draw each object came from (the case's object k is draw `draws[k]`).
 
   Objects are drawn one after another from the seed's stream; draws in `skip` are passed over
-  (the file names them) and later ones take their place. Each object goes to the lowest of `spots_per_object` random
+  (the file names them), as is a draw that no spot rests, and later ones take their place. Each object goes to the lowest of `spots_per_object` random
   spots, just above every object already placed whose footprint circle its own overlaps: the heap
   is built as if each object were set down gently onto it, so settling moves objects millimetres,
   not the decimetres of a drop that scatters them out of the workspace.
@@ -104,6 +105,8 @@ def random_case(n: int, seed: int, skip: frozenset = frozenset(),
       continue
     base = np.array([support(placed, spot, radius) for spot in spots])
     best = int(np.argmin(base))
+    if not np.isfinite(base[best]):  # no spot rests it: the heap is too full here, draw again
+      continue
     z = base[best] + half_height(shape) + 0.001
     placed.append((*spots[best], radius, z + half_height(shape)))
     text += line(shape, COLOR_NAMES[len(draws) % 10], *spots[best], yaw,
@@ -247,6 +250,7 @@ def isolated_cases() -> list[str]:
 
 VALIDATION_SEED = 10_000  # validation cases draw from seeds apart from the shipped suites
 VALIDATION_HIGH_SEED = VALIDATION_SEED + 700  # val-occluded-high's draws, apart from val-occluded's
+VALIDATION_HEAPS_SEED = VALIDATION_SEED + 50  # val-heaps' draws, apart from val-random's (+0..5)
 
 
 def turned(parts, angle_deg: float, x0: float, y0: float, start_colour: int = 0) -> list[str]:
@@ -384,6 +388,9 @@ def validation_suites(cases: int = 6) -> dict[str, list[str]]:
       'val-occluded-high': [passing(lambda tries, i=i: drawn_occluded_case(
           occluders.VALIDATION_HIGH, VALIDATION_HIGH_SEED + 100 * tries + i, i, HIGH_KINDS),
                                     seen_by_one=True) for i in range(cases)],
+      'val-heaps': [passing(lambda tries, n=n, i=i: heap_on_table(
+                        n, VALIDATION_HEAPS_SEED + 100 * tries + i))
+                    for i, n in enumerate(np.linspace(20, 40, 2 * cases).round().astype(int))],
   }
 
 

@@ -12,7 +12,7 @@ from mvcoba_jax.suites import SUITES, SUITES_DIR, generate
 from mvcoba_jax.suites.similarity import largest_rigid_match
 
 VALIDATION = pathlib.Path(__file__).resolve().parents[2] / 'docs' / 'results' / 'validation'
-KINDS = ('val-random', 'val-ordered', 'val-occluded', 'val-occluded-high')
+KINDS = ('val-random', 'val-ordered', 'val-occluded', 'val-occluded-high', 'val-heaps')
 
 
 def files(folder: pathlib.Path):
