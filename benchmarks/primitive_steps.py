@@ -6,8 +6,8 @@ random rotation) under the default preset's script and under the script with `--
 (e.g. `env.lift_height=0.15`). Prints one JSON object: each script's physics steps per grasp, per
 push and per primitive (both run the longer one's count, in lockstep), the share of grasps whose
 success agrees, how far each object in play after both came to rest apart after the pushes
-(`--rest-steps` with the gripper parked; median, p90, max, the share within 2 cm), objects lost, and the wall time of
-one batched step each (after compiling).
+(`--rest-steps` with the gripper parked; median, p90, max, the share within 2 cm), objects lost,
+and the wall time of one batched step each (after compiling).
 
   python benchmarks/primitive_steps.py [--batch 128] [--seed 0] [--set KEY=VALUE ...]
 """

@@ -78,7 +78,8 @@ VARIANTS = {
     # twice the slots) dropped over the test heaps' square (`suites.generate.PILE_HALF`), where
     # the test's 20-40-object heaps reach the border and every loss happened.
     'dense_heaps': COMBINATION + [
-        '--set', 'scene.pool=cube:4,tall_box:4,flat_box:2,prism:4,arch:4,cylinder:2,disk:2,octagon:2',
+        '--set',
+        'scene.pool=cube:4,tall_box:4,flat_box:2,prism:4,arch:4,cylinder:2,disk:2,octagon:2',
         '--set', 'scene.max_contact_points=240', '--set', 'scene.max_geom_pairs=48',
         '--set', 'env.num_objects=20', '--set', 'env.heap_half=0.155'],
 }

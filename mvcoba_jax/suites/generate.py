@@ -21,10 +21,11 @@ writes validation suites drawn apart from the shipped suites (val-random: heaps 
 val-ordered: packed templates no shipped case holds, a brick bond, a hexagonal packing, staggered
 tall boxes; val-occluded: occluders from `sim/occluders.py`'s validation region, which neither
 training nor the tests use; val-occluded-high: from its high validation region, which hides as
-much as the test's; val-heaps: twice the cases of heaps the test's sizes, 20-40 objects, where
-val-random's 18 runs a seed were too few to rank what loses objects) for choosing training settings, never the shipped suites results
-are reported on. tests/unit/test_validation_cases.py checks that they share no layout
-(`suites/similarity.py`) and no occluder pose with the shipped suites.
+much as the test's; val-heaps: twice the cases of heaps of the test's sizes, 20-40 objects, where
+val-random's 18 runs a seed were too few to rank what loses objects) for choosing training
+settings, never the shipped suites results are reported on. tests/unit/test_validation_cases.py
+checks that they share no layout (`suites/similarity.py`) and no occluder pose with the shipped
+suites.
 """
 from __future__ import annotations
 
@@ -82,8 +83,9 @@ def random_case(n: int, seed: int, skip: frozenset = frozenset(),
   the draw each object came from (the case's object k is draw `draws[k]`).
 
   Objects are drawn one after another from the seed's stream; draws in `skip` are passed over
-  (the file names them), as is a draw that no spot rests, and later ones take their place. Each object goes to the lowest of `spots_per_object` random
-  spots, just above every object already placed whose footprint circle its own overlaps: the heap
+  (the file names them), as is a draw that no spot rests, and later ones take their place. Each
+  object goes to the lowest of `spots_per_object` random spots, just above every object already
+  placed whose footprint circle its own overlaps: the heap
   is built as if each object were set down gently onto it, so settling moves objects millimetres,
   not the decimetres of a drop that scatters them out of the workspace.
   """

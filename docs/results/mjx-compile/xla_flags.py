@@ -2,8 +2,9 @@
 environment, and whether its result changes: prints the flags, trace-and-lower and compile
 seconds, a second run, and a fingerprint of its settled states (objects in play, mean qpos).
 
-  for f in --xla_llvm_disable_expensive_passes=true "" --xla_llvm_disable_expensive_passes=true ""; do
-    JAX_ENABLE_COMPILATION_CACHE=false XLA_FLAGS="$f" python docs/results/mjx-compile/xla_flags.py
+  f=--xla_llvm_disable_expensive_passes=true
+  for flags in $f "" $f ""; do
+    JAX_ENABLE_COMPILATION_CACHE=false XLA_FLAGS="$flags" python docs/results/mjx-compile/xla_flags.py
   done > xla_flags.jsonl
 """
 import json
