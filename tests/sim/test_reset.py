@@ -50,6 +50,18 @@ def test_no_interpenetration_after_settling(env, states):
     assert max_penetration(env, states.sim.qpos[b]) < 0.002
 
 
+def test_a_settled_drop_settled_again_stays_where_it_rests():
+  """`Tabletop.settle` (the end of every reset, and how benchmarks compare where objects come
+  to rest) moves nothing that is already at rest and keeps every object in play."""
+  env = make_env('paper_text', 'native')
+  state = jax.jit(env.reset)(jax.random.PRNGKey(3))
+  again = jax.jit(lambda s: env.settle(s, 100))(state)
+  np.testing.assert_array_equal(np.asarray(again.in_play), np.asarray(state.in_play))
+  moved = np.linalg.norm(np.asarray(env.object_positions(again) - env.object_positions(state)),
+                         axis=-1)[np.asarray(state.in_play)]
+  assert moved.max() < 0.002, moved.max()
+
+
 @pytest.mark.parametrize('backend', BACKENDS)
 def test_heap_drop_settles_sound_and_closer_to_the_centre(backend):
   """env.drop='heap' (the authors' training scenes) on both physics backends, with the authors'
