@@ -126,7 +126,9 @@ class TrainConfig:
   # multiple of 90 degrees about the heightmap centre, teaching a network whose early stages see
   # the state unturned (`network.shared_stages`) the symmetry that turned heightmaps build in.
   # `lost_object_reward` is added for each object that leaves the workspace during the action (0:
-  # the paper's and the authors' rewards, which do not see losses).
+  # the paper's and the authors' rewards, which do not see losses). Down to -3: a push that sends
+  # an object off the table changes the heightmap surely, earning 0.5 and a future, so a loss
+  # must cost more than a push that changes nothing (`no_change_push_reward`) to be avoided.
   failed_grasp_reward: float = 0.5
   no_change_push_reward: float = 0.0
   lost_object_reward: float = 0.0
@@ -150,7 +152,7 @@ class TrainConfig:
         'priority_exponent': Between(0, 10),
         'target_update_period': Between(1, 10 ** 9), 'target': TARGETS,
         'checkpoint_every': Between(1, 10 ** 9), 'failed_grasp_reward': Between(-1, 1),
-        'no_change_push_reward': Between(-1, 1), 'lost_object_reward': Between(-1, 0),
+        'no_change_push_reward': Between(-1, 1), 'lost_object_reward': Between(-3, 0),
         'future_max': FUTURE_MAX,
         'curve_window': Between(1, 10 ** 7)})
 
