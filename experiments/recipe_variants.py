@@ -74,9 +74,9 @@ VARIANTS = {
     # The combination paying -0.5 for each object an action sends out of the workspace: its heap
     # runs fail to clear by losing objects, mostly neighbours of a push, which no rule sees.
     'lost_penalty': COMBINATION + ['--set', 'train.lost_object_reward=-0.5'],
-    # The combination paying -2 per object lost: a push that loses one then earns 0.5 - 2 plus a
-    # future, no better than a push that changes nothing (-1, no future), where at -0.5 it was
-    # still far better; on the test's heaps every push lost about one object.
+    # The combination paying -2 per object lost: a push that loses one then earns 0.5 - 2 and a
+    # future, about what a push that changes nothing earns (-1, no future), where at -0.5 it was
+    # far better; on the test's heaps every push lost about one object.
     'lost_penalty_2': COMBINATION + ['--set', 'train.lost_object_reward=-2'],
     # The combination trained on denser heaps: 20 objects (twice the paper's 10, from a pool of
     # twice the slots) dropped over the test heaps' square (`suites.generate.PILE_HALF`), where
