@@ -22,7 +22,12 @@ def main():
   pushes, lost = [], []
   for path in args.results:
     with open(path) as f:
-      rows = json.load(f)[args.suite]
+      suites = json.load(f)
+    # a validation suite is keyed by its folder's path: match its name
+    rows = next((rows for key, rows in suites.items()
+                 if key.rstrip('/').split('/')[-1] == args.suite), None)
+    if rows is None:
+      raise SystemExit(f'{path}: no suite {args.suite} (it has {", ".join(suites)})')
     for row in rows.values():
       for case in row['runs'].values():
         for run in case:
