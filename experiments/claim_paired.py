@@ -3,7 +3,8 @@ same seeds' checkpoints, `recipe/winning/claim/claim.sh`) gives every suite's gr
 completed and objects picked per seed and case; the table holds each recipe's mean with its
 interval over the seeds and the candidate less the baseline paired by seed (the seed's luck in
 the suites' cases cancels only where both recipes trained the same seeds, so seeds are matched by
-their run name, `...-sN`), and the objects each lost (runs with a loss).
+their run name, `...-sN`: a row's settings hold the evaluation's seed, not the training's), and
+the objects each lost (runs with a loss).
 
   python experiments/claim_paired.py CANDIDATE/results.json BASELINE/results.json \
     [--names candidate baseline] > paired.md
@@ -11,10 +12,11 @@ their run name, `...-sN`), and the objects each lost (runs with a loss).
 from __future__ import annotations
 
 import argparse
-import json
+import pathlib
 import re
+import sys
 
-from mvcoba_jax.evaluation import intervals
+from mvcoba_jax.evaluation import intervals, report
 
 METRICS = (('grasp_success', 'grasp success'), ('completion', 'runs completed'),
            ('objects_picked', 'objects picked'))
@@ -42,23 +44,17 @@ def losses(rows: dict, seeds: list[int]) -> str:
           f'{len(runs)})')
 
 
-def cell(value) -> str:
-  if value is None:
-    return 'undefined'
-  point, low, high = value
-  return f'{point:.1f} [{low:.1f}, {high:.1f}]'
-
-
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('candidate')
   parser.add_argument('baseline')
   parser.add_argument('--names', nargs=2, default=('candidate', 'baseline'))
   args = parser.parse_args()
-  with open(args.candidate) as f:
-    candidate = json.load(f)
-  with open(args.baseline) as f:
-    baseline = json.load(f)
+  try:
+    candidate = report.read_results(pathlib.Path(args.candidate))
+    baseline = report.read_results(pathlib.Path(args.baseline))
+  except report.ResultsError as e:
+    sys.exit(f'claim_paired: {e}')
   a, b = args.names
   print(f'| suite | metric | {a} | {b} | {a} - {b}, paired by seed |')
   print('|---|---|---|---|---|')
@@ -72,9 +68,9 @@ def main():
       x, y = scores(mine, seeds, metric), scores(theirs, seeds, metric)
       defined = all(v is not None for row in x + y for v in row)
       print(f'| {suite} | {label} | '
-            f'{cell(intervals.interval(x, within=RATE) if defined else None)} | '
-            f'{cell(intervals.interval(y, within=RATE) if defined else None)} | '
-            f'{cell(intervals.paired(x, y) if defined else None)} |')
+            f'{report.interval_cell(intervals.interval(x, within=RATE) if defined else None)} | '
+            f'{report.interval_cell(intervals.interval(y, within=RATE) if defined else None)} | '
+            f'{report.interval_cell(intervals.paired(x, y) if defined else None)} |')
     lost.append(f'{suite}: {losses(mine, seeds)} against {losses(theirs, seeds)}')
   print(f'\nObjects lost, {a} against {b} (runs with a loss): ' + '; '.join(lost) + '.')
 

@@ -7,9 +7,12 @@ with the objects each group lost per run, and the correlation over runs.
 from __future__ import annotations
 
 import argparse
-import json
+import pathlib
+import sys
 
 import numpy as np
+
+from mvcoba_jax.evaluation import report
 
 GROUPS = ((0, 0), (1, 1), (2, 2), (3, 4), (5, None))
 
@@ -21,8 +24,10 @@ def main():
   args = parser.parse_args()
   pushes, lost = [], []
   for path in args.results:
-    with open(path) as f:
-      suites = json.load(f)
+    try:
+      suites = report.read_results(pathlib.Path(path))
+    except report.ResultsError as e:
+      sys.exit(f'push_losses: {e}')
     # a validation suite is keyed by its folder's path: match its name
     rows = next((rows for key, rows in suites.items()
                  if key.rstrip('/').split('/')[-1] == args.suite), None)
