@@ -61,7 +61,8 @@ LEGACY = {TrainConfig: {'target': 'network', 'failed_grasp_reward': 0.5,
                       'packed_share': 0.0},
           NetworkConfig: {'pad_to_diagonal': False, 'shared_stages': 0, 'suppress': False,
                           'push_room': 0.0},
-          PerceptionConfig: {'failed_grasp_changes': True, 'fill_unseen': False}}
+          PerceptionConfig: {'failed_grasp_changes': True, 'fill_unseen': False,
+                             'failed_grasp_retries': 0}}
 
 # Fields that choose where a run computes, not what it computes: a saved config that lacks them
 # (written before they existed) runs on this machine's choice without a warning.

@@ -37,6 +37,11 @@ class PerceptionConfig:
   # Beyond the paper, off in its rule: a grasp that held nothing counts as no change whatever it
   # moved, so the change rule pushes next instead of grasping again at the nudged pile.
   failed_grasp_changes: bool = True
+  # With `failed_grasp_changes` off, the first `failed_grasp_retries` grasps in a row that hold
+  # nothing still count as change when they moved the scene (the rule grasps again); the next is
+  # no change (the rule pushes): on a heap a push after a failed grasp shoves neighbours over the
+  # border, where a second grasp may hold.
+  failed_grasp_retries: int = 0
   # Beyond the paper: each view's unseen cells (an occluder's shadow) take the highest point the
   # other views saw there, and its colour, before anything reads the heightmaps; `seen` stays
   # what each camera saw.
@@ -45,6 +50,7 @@ class PerceptionConfig:
   def __post_init__(self):
     check(self, 'perception.', {'heightmap_resolution': Between(0.0005, 0.05),
                                 'change_area': Between(0, 1, low_open=True),
+                                'failed_grasp_retries': Between(0, 100),
                                 'change_min': Between(0, 1), 'change_max': Between(0, 1)})
 
 

@@ -102,7 +102,8 @@ class Task:
     changed = perception.change_observed(obs, next_obs, info.grasp_success,
                                          self.perception) & healthy
     if not self.perception.failed_grasp_changes:
-      changed &= (action.primitive != agent.GRASP) | info.grasp_success
+      retry = state.failures < self.perception.failed_grasp_retries
+      changed &= (action.primitive != agent.GRASP) | info.grasp_success | retry
     reward = jnp.where(healthy,
                        agent.reward(action.primitive, info.grasp_success, changed, info.lost,
                                     self.reward),
