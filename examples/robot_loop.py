@@ -75,6 +75,7 @@ def run(rig: Rig, policy: OnnxPolicy, calibration, actions: int, say=print) -> l
   depths, colors = rig.capture()
   frame = heightmaps(depths, calibration, colors)
   changed, records = True, []  # before the first action the scene counts as changed
+  failed_grasps = 0  # grasps in a row that held nothing
   for i in range(actions):
     try:
       action = policy.act(*frame, changed, calibration)
@@ -85,7 +86,8 @@ def run(rig: Rig, policy: OnnxPolicy, calibration, actions: int, say=print) -> l
     grasped = rig.execute(action)
     depths, colors = rig.capture()
     after = heightmaps(depths, calibration, colors)
-    changed = policy.changed(frame[1:], after[1:], grasped)
+    changed = policy.changed(frame[1:], after[1:], grasped, failed_grasps)
+    failed_grasps = failed_grasps + 1 if grasped is False else 0
     frame = after
     records.append({'round': i, 'primitive': action.primitive,
                     'position': [round(v, 4) for v in action.position],

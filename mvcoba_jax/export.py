@@ -184,6 +184,7 @@ def model_file_of(config: Config, method: methods.Method) -> model_file.ModelFil
       views_used=method.views, height_unit_m=HEIGHT_UNIT, below_table_m=BELOW_TABLE,
       onnx_file='model.onnx', change_min=p.change_min, change_max=p.change_max,
       change_area=p.change_area, failed_grasp_changes=p.failed_grasp_changes,
+      failed_grasp_retries=p.failed_grasp_retries,
       fill_unseen=p.fill_unseen)
 
 

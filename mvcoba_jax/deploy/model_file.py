@@ -39,7 +39,8 @@ class ModelFile:
   change_min: float
   change_max: float
   change_area: float
-  failed_grasp_changes: bool  # False: a grasp that held nothing is no change
+  failed_grasp_changes: bool  # False: a grasp that held nothing is no change ...
+  failed_grasp_retries: int  # ... past this many such grasps in a row
   fill_unseen: bool  # each view's unseen cells filled from the others first
   raw: dict | None = dataclasses.field(default=None, compare=False)  # the whole file as read
 
@@ -63,10 +64,11 @@ FIELDS = {
     'change_max': ('config.perception.change_max', float, (0.0, 1.0)),
     'change_area': ('config.perception.change_area', float, (0.0, 1.0)),
     'failed_grasp_changes': ('config.perception.failed_grasp_changes', bool, None),
+    'failed_grasp_retries': ('config.perception.failed_grasp_retries', int, (0, 100)),
     'fill_unseen': ('config.perception.fill_unseen', bool, None),
 }
 ABSENT = {'height_unit_m': HEIGHT_UNIT, 'below_table_m': BELOW_TABLE,
-          'failed_grasp_changes': True, 'fill_unseen': False}
+          'failed_grasp_changes': True, 'failed_grasp_retries': 0, 'fill_unseen': False}
 _REQUIRED = object()  # a field without a value in ABSENT
 
 

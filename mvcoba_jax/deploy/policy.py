@@ -110,19 +110,21 @@ class OnnxPolicy:
                   angle=math.remainder(angle, 2 * math.pi), rotation=rotation, row=row, col=col,
                   q=score)
 
-  def changed(self, before, after, grasped: bool | None = None) -> bool:
+  def changed(self, before, after, grasped: bool | None = None, failed_grasps: int = 0) -> bool:
     """Whether the last action changed the scene, as training observes it
     (`perception.change_observed`): a grasp that held something (`grasped` True), or between
     two frames' (depth, seen) heightmaps more cells than `change_area` / resolution^2 in some
     view changed height by between `change_min` and `change_max` (model.json's config; VPG's
     300 cells at 2 mm, 1 to 30 cm), cells missing from either frame counting as unchanged. A
     policy trained with `perception.failed_grasp_changes` off counts a grasp that held nothing
-    (`grasped` False) as no change whatever it moved. `grasped`: None after a push, or where the
-    robot cannot tell."""
+    (`grasped` False) as no change whatever it moved, once `failed_grasps` (the grasps in a row
+    before it that held nothing) reach its `failed_grasp_retries`. `grasped`: None after a push,
+    or where the robot cannot tell."""
     spec = self.spec
     if grasped:
       return True
-    if grasped is False and not spec.failed_grasp_changes:
+    if (grasped is False and not spec.failed_grasp_changes
+        and failed_grasps >= spec.failed_grasp_retries):
       return False
     (d0, s0), (d1, s1) = (tuple(np.asarray(a) for a in frame) for frame in (before, after))
     if (not d0.shape == s0.shape == d1.shape == s1.shape or s0.dtype != np.bool_

@@ -292,7 +292,8 @@ def test_a_network_that_scores_nan_is_never_acted_on():
 def test_a_failed_grasp_is_no_change_for_a_policy_trained_so(scenes, onnx):
   """`changed` as training observes it: a grasp that held something is a change whatever the
   frames show; a grasp that held nothing is no change for a policy trained with
-  `perception.failed_grasp_changes=false`, whatever it moved, and the frames decide otherwise."""
+  `perception.failed_grasp_changes=false`, whatever it moved, past its
+  `failed_grasp_retries` such grasps in a row, and the frames decide otherwise."""
   import copy
   import dataclasses
   env, _, _, observed = scenes
@@ -305,6 +306,11 @@ def test_a_failed_grasp_is_no_change_for_a_policy_trained_so(scenes, onnx):
   assert paper.changed(before, after, grasped=False)  # the paper's rule: the frames decide
   assert not onnx.spec.failed_grasp_changes and not onnx.changed(before, after, grasped=False)
   assert onnx.changed(before, after) and onnx.changed(before, before, grasped=True)
+  retrying = copy.copy(onnx)
+  retrying.spec = dataclasses.replace(onnx.spec, failed_grasp_retries=1)
+  assert retrying.changed(before, after, grasped=False)  # the first: the frames decide
+  assert not retrying.changed(before, before, grasped=False)
+  assert not retrying.changed(before, after, grasped=False, failed_grasps=1)
   with pytest.raises(DeployError, match='two frames of one shape'):
     onnx.changed(before, (after[0][:, :50], after[1][:, :50]))
   with pytest.raises(DeployError, match='seen as booleans'):

@@ -266,21 +266,23 @@ def test_other_networks_export_round_trip_with_onnx_parity(method, overrides, tm
 
 
 def test_a_policy_that_fills_unseen_cells_acts_alike_in_jax_and_deploy(tmp_path):
-  """MV-COBA trained with suppression, a push after a failed grasp and unseen cells filled from
-  the other view, exported: with one camera blind to half the table, deploy (numpy fill, ONNX
-  scores, its rule) takes the JAX policy's action, after a change and after none; without
-  `seen` the JAX policy refuses."""
+  """MV-COBA trained with suppression, a push after a second failed grasp and unseen cells
+  filled from the other view, exported: with one camera blind to half the table, deploy (numpy
+  fill, ONNX scores, its rule) takes the JAX policy's action, after a change and after none;
+  without `seen` the JAX policy refuses."""
   from mvcoba_jax.deploy import OnnxPolicy, calibration_from_dict
   from mvcoba_jax.deploy.heightmaps import filled
   from mvcoba_jax.sim import cameras
   (tmp_path / 'run').mkdir()
   trainer, workdir, _ = _workdir(resolve(TINY, ['network.suppress=true',
                                                 'perception.fill_unseen=true',
-                                                'perception.failed_grasp_changes=false']),
+                                                'perception.failed_grasp_changes=false',
+                                                'perception.failed_grasp_retries=1']),
                                  tmp_path / 'run')
   folder = export.export(workdir, tmp_path / 'export')['onnx'].parent
   jax_policy, onnx = policy.load(folder), OnnxPolicy(folder)
   assert onnx.spec.fill_unseen and not onnx.spec.failed_grasp_changes
+  assert onnx.spec.failed_grasp_retries == 1
   config = jax_policy.config
   side = perception.grid_size(config.perception, config.scene)
   rng = np.random.default_rng(2)
