@@ -37,10 +37,11 @@ class PerceptionConfig:
   # Beyond the paper, off in its rule: a grasp that held nothing counts as no change whatever it
   # moved, so the change rule pushes next instead of grasping again at the nudged pile.
   failed_grasp_changes: bool = True
-  # With `failed_grasp_changes` off, the first `failed_grasp_retries` grasps in a row that hold
-  # nothing still count as change when they moved the scene (the rule grasps again); the next is
-  # no change (the rule pushes): on a heap a push after a failed grasp shoves neighbours over the
-  # border, where a second grasp may hold.
+  # With `failed_grasp_changes` off, after each of the first `failed_grasp_retries` grasps in a
+  # row that held nothing but moved the scene the rule grasps again, pushing after the next; the
+  # reward and targets still count them as no change (a failed grasp keeps its zero future). On
+  # a heap a push after a failed grasp shoves neighbours over the border, where a second grasp
+  # may hold.
   failed_grasp_retries: int = 0
   # Beyond the paper: each view's unseen cells (an occluder's shadow) take the highest point the
   # other views saw there, and its colour, before anything reads the heightmaps; `seen` stays

@@ -267,7 +267,7 @@ def lockstep(task: Task, actor: Actor, batch: Batch, record: bool, progress,
   action, carry = actor.act(batch.carry, obs, before.changed, active, k_act,
                             (runs.failed, runs.tried))
   after, out = task.step(before, action)
-  carry = actor.observe(carry, task.transition(obs, after.obs, action, out), out.done, active)
+  carry = actor.observe(carry, task.transition(obs, after, action, out), out.done, active)
   info = out.info
   count = lambda total, x: total + jnp.where(active, x, 0).astype(jnp.int32)
   is_grasp = action.primitive == agent.GRASP

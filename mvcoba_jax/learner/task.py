@@ -27,7 +27,9 @@ class State:
   """What the task carries from one action to the next, per tabletop (B,)."""
   env: EnvState  # the scene
   obs: perception.Observation  # what the cameras see of it
-  changed: jnp.ndarray  # bool: the last action changed the scene (True at an episode's start)
+  # bool: the rule meets the scene as changed (True at an episode's start; after a change, and
+  # after a failed grasp that `perception.failed_grasp_retries` grasps again)
+  changed: jnp.ndarray
   failures: jnp.ndarray  # int32: failed actions in a row this episode
 
 
@@ -35,7 +37,7 @@ class State:
 class Outcome:
   """What one lockstep action did, per tabletop (B,)."""
   info: StepInfo  # the physics' bookkeeping: grasp success, picked, lost, health
-  changed: jnp.ndarray  # the scene changed (always False for bad physics)
+  changed: jnp.ndarray  # the scene changed, as reward and targets count it (False: bad physics)
   reward: jnp.ndarray
   failures: jnp.ndarray  # consecutive failed actions, this one included
   cleared: jnp.ndarray  # no object left in play
@@ -101,9 +103,11 @@ class Task:
     healthy = info.healthy
     changed = perception.change_observed(obs, next_obs, info.grasp_success,
                                          self.perception) & healthy
+    rule_changed = changed
     if not self.perception.failed_grasp_changes:
-      retry = state.failures < self.perception.failed_grasp_retries
-      changed &= (action.primitive != agent.GRASP) | info.grasp_success | retry
+      held = (action.primitive != agent.GRASP) | info.grasp_success
+      rule_changed = changed & (held | (state.failures < self.perception.failed_grasp_retries))
+      changed &= held
     reward = jnp.where(healthy,
                        agent.reward(action.primitive, info.grasp_success, changed, info.lost,
                                     self.reward),
@@ -112,13 +116,14 @@ class Task:
                          state.failures + 1, 0)
     cleared = ~jnp.any(states.in_play, axis=1)
     done = cleared | (failures > self.env.config.env.max_failures) | ~healthy
-    return (State(env=states, obs=next_obs, changed=changed, failures=failures),
+    return (State(env=states, obs=next_obs, changed=rule_changed, failures=failures),
             Outcome(info=info, changed=changed, reward=reward, failures=failures,
                     cleared=cleared, done=done))
 
-  def transition(self, before: perception.Observation, after: perception.Observation,
+  def transition(self, before: perception.Observation, after: State,
                  action: agent.PixelAction, out: Outcome) -> Transition:
-    """The transition (B,) an action made, as training and online evaluation learn from it.
+    """The transition (B,) an action made from `before` to `after` (the task as the next action
+    meets it), as training and online evaluation learn from it.
 
     The task goes on past an episode's end (docs/design.md; VPG does the same): the action that
     ended one bootstraps from the fresh tabletop `after` shows, which the rule meets as after a
@@ -130,5 +135,5 @@ class Task:
     no_future = ~healthy | (~out.changed if not self.reward.bootstrap_no_change else False)
     return Transition(obs=before, primitive=action.primitive, rotation=action.rotation,
                       row=action.row, col=action.col, reward=out.reward,
-                      next_obs=where_envs(healthy, after, before), done=no_future,
-                      changed=out.changed | out.done, next_value=jnp.zeros_like(out.reward))
+                      next_obs=where_envs(healthy, after.obs, before), done=no_future,
+                      changed=after.changed | out.done, next_value=jnp.zeros_like(out.reward))

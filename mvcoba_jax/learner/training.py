@@ -193,7 +193,7 @@ class Trainer:
                                               state.reserve, after.env, done, k_reset)
     after = self.task.restart(after, done, env_states, self.per_env)
 
-    transition = self.task.transition(before.obs, after.obs, action, out)
+    transition = self.task.transition(before.obs, after, action, out)
     if t.target == 'acting':
       # The last step's transitions led to the states acted on now (or ended in bad physics,
       # which does not bootstrap): this step's forward values their next states.
