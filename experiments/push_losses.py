@@ -46,7 +46,8 @@ def main():
   for low, high in GROUPS:
     chosen = (pushes >= low) & (pushes <= (np.inf if high is None else high))
     label = f'{low}' if low == high else (f'{low} or more' if high is None else f'{low}-{high}')
-    print(f'| {label} | {chosen.sum()} | {lost[chosen].mean():.2f} |')
+    mean = f'{lost[chosen].mean():.2f}' if chosen.any() else '-'
+    print(f'| {label} | {chosen.sum()} | {mean} |')
 
 
 if __name__ == '__main__':
