@@ -101,12 +101,19 @@ def filled(color, depth, seen, xp=np):
           xp.where(seen, depth, fill_depth[None]).astype(depth.dtype))
 
 
-def changed_views(before_depth, before_seen, after_depth, after_seen, change_min: float,
-                  change_max: float, change_area: float, resolution: float, xp=np):
-  """(..., V) whether each view's heightmap (..., V, R, R) changed: more cells than
-  `change_area` / resolution^2 (VPG's 300 cells at 2 mm) changed height by between
+def moved_cells(before_depth, before_seen, after_depth, after_seen, change_min: float,
+                change_max: float, xp=np):
+  """(..., V) how many cells of each view's heightmap (..., V, R, R) changed height by between
   `change_min` and `change_max`, cells missing from either frame counting as unchanged (VPG's
   rule). `xp` is numpy here and jax.numpy in training (`perception.change_observed`)."""
   diff = xp.abs(after_depth - before_depth)
   moved = (diff >= change_min) & (diff <= change_max) & before_seen & after_seen
-  return moved.sum(axis=(-2, -1)) > change_area / resolution ** 2
+  return moved.sum(axis=(-2, -1))
+
+
+def changed_views(before_depth, before_seen, after_depth, after_seen, change_min: float,
+                  change_max: float, change_area: float, resolution: float, xp=np):
+  """(..., V) whether each view's heightmap (..., V, R, R) changed: more `moved_cells` than
+  `change_area` / resolution^2 (VPG's 300 cells at 2 mm)."""
+  return (moved_cells(before_depth, before_seen, after_depth, after_seen, change_min, change_max,
+                      xp) > change_area / resolution ** 2)

@@ -15,6 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from mvcoba_jax import api
+from mvcoba_jax.deploy.heightmaps import moved_cells
 from mvcoba_jax.learner import agent
 from mvcoba_jax.learner import task as task_lib
 
@@ -29,9 +30,9 @@ def _record(primitive, success, area, in_play):
 def measured_step(self, state, action, per_env=task_lib._whole):
   after, out = plain_step(self, state, action, per_env)
   p = self.perception
-  diff = jnp.abs(after.obs.depth - state.obs.depth)
-  moved = (diff >= p.change_min) & (diff <= p.change_max) & state.obs.seen & after.obs.seen
-  area = moved.sum(axis=(-2, -1)).max(axis=-1) * p.heightmap_resolution ** 2
+  cells = moved_cells(state.obs.depth, state.obs.seen, after.obs.depth, after.obs.seen,
+                      p.change_min, p.change_max, jnp)
+  area = cells.max(axis=-1) * p.heightmap_resolution ** 2
   jax.debug.callback(_record, action.primitive, out.info.grasp_success, area,
                      jnp.sum(state.env.in_play, axis=1))
   return after, out

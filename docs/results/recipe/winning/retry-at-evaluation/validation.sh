@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
-# The retry rule on the combination's five claim networks, at evaluation only: retries 0 and 1,
-# val-heaps, val-ordered, 3 runs per case, frozen.
+# The retry rule on the combination's five claim networks, at evaluation only: each RETRIES given
+# (0 1, then 2), val-heaps and val-ordered, 3 runs per case, frozen.
+#   bash validation.sh RETRIES...
 cd /work/main
 export PATH=/work/main/.venv/bin:$PATH PYTHONPATH=/work/main
 V=docs/results/validation
 echo "start $(date -u +%FT%TZ) commit $(git rev-parse --short HEAD)" >> /work/retry-eval/runs.txt
-for r in 0 1; do
+for r in "$@"; do
   python docs/results/recipe/winning/retry-at-evaluation/evaluate.py $r /work/retry-eval/retries-$r \
     /work/study-winning/suppress_push_fill/mvcoba-s{0,1,2,3,4} --suite $V/val-heaps $V/val-ordered \
     > /work/retry-eval/retries-$r.log 2>&1
