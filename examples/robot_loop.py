@@ -101,12 +101,15 @@ def main(argv=None) -> int:
   parser.add_argument('--model', required=True, help='an mvcoba-export folder with model.onnx')
   parser.add_argument('--actions', type=int, default=10)
   parser.add_argument('--seed', type=int, default=0)
+  parser.add_argument('--failed-grasp-retries', type=int,
+                      help="grasps again after this many failed grasps in a row before pushing, "
+                           "in place of model.json's (a policy with failed_grasp_changes false)")
   args = parser.parse_args(argv)
   if args.actions < 1 or args.seed < 0:
     parser.error(f'--actions {args.actions} --seed {args.seed}: at least 1 action, a seed of 0 '
                  'or more')
   try:
-    policy = OnnxPolicy(args.model)
+    policy = OnnxPolicy(args.model, failed_grasp_retries=args.failed_grasp_retries)
     rig = SimulatedRig(policy.model, args.seed)
     run(rig, policy, calibration_from_dict(rig.calibration), args.actions)
   except DeployError as e:

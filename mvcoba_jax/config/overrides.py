@@ -89,17 +89,22 @@ def override(config, assignment: str):
   return config
 
 
-# What a trained policy's network was built for: no --set of these at evaluation.
+# What a trained policy's network was built for: no --set of these at evaluation, but for the
+# `ACTING_RULE`.
 FIXED_BY_TRAINING = ('network.', 'perception.', 'env.num_rotations', 'scene.workspace_half')
+# What the change rule makes of a grasp that held nothing: which primitive comes next, not what
+# the network reads, so a trained policy may act under other values than it trained with.
+ACTING_RULE = ('perception.failed_grasp_changes', 'perception.failed_grasp_retries')
 
 
 def evaluated(config: Config, overrides: typing.Sequence[str]) -> Config:
-  """A trained policy's config with an evaluation's `--set` overrides (physics, episode), which
-  may not touch what training fixed (`FIXED_BY_TRAINING`)."""
+  """A trained policy's config with an evaluation's `--set` overrides (physics, episode, the
+  `ACTING_RULE`), which may not touch what training fixed (`FIXED_BY_TRAINING`)."""
   for assignment in overrides:
     key = assignment.split('=', 1)[0].strip()
-    if key.startswith(FIXED_BY_TRAINING):
+    if key.startswith(FIXED_BY_TRAINING) and key not in ACTING_RULE:
       raise ConfigError(f'--set {key}: fixed by the trained policy\'s network (its network, '
-                        'perception, rotations and workspace); it cannot change at evaluation')
+                        'perception, rotations and workspace); it cannot change at evaluation '
+                        f'(of perception only {" and ".join(ACTING_RULE)} can)')
     config = override(config, assignment)
   return validate(config)

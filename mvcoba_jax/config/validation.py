@@ -37,6 +37,10 @@ def _parts_fit(config: Config) -> None:
   if config.perception.change_min >= config.perception.change_max:
     raise ConfigError(f'perception.change_min={config.perception.change_min!r} must be below '
                       f'perception.change_max={config.perception.change_max!r}')
+  if config.perception.failed_grasp_retries and config.perception.failed_grasp_changes:
+    raise ConfigError(f'perception.failed_grasp_retries={config.perception.failed_grasp_retries} '
+                      'needs perception.failed_grasp_changes=false (with it on, a failed grasp '
+                      'that moved the scene is change and the rule grasps again anyway)')
   if train.epsilon_end > train.epsilon_start:
     raise ConfigError(f'train.epsilon_end={train.epsilon_end!r} must not exceed '
                       f'train.epsilon_start={train.epsilon_start!r}')

@@ -126,8 +126,29 @@ def read(folder) -> ModelFile:
   if abs(field.get('config.perception.heightmap_resolution', float, (1e-4, 0.05)) - res) > 1e-12:
     raise DeployError(f'{path}: config.perception.heightmap_resolution is not '
                       'heightmap.resolution_m')
-  return ModelFile(**{**got, 'angles_rad': tuple(float(a) for a in angles),
+  spec = ModelFile(**{**got, 'angles_rad': tuple(float(a) for a in angles),
                       'views_used': tuple(used)}, graph_decides=fmt == FORMAT, raw=raw)
+  return acting_rule(spec, where=f'{path}: config.perception')
+
+
+def acting_rule(spec: ModelFile, failed_grasp_changes: bool | None = None,
+                failed_grasp_retries: int | None = None, where: str = 'acting rule') -> ModelFile:
+  """`spec` acting under another change rule after a failed grasp (None keeps model.json's):
+  the rule's choice of the next primitive, which the network does not read, as
+  `mvcoba-eval --set perception.failed_grasp_retries=N` evaluates it. DeployError when the
+  retries are not a whole number in 0-100 or are set with `failed_grasp_changes` on."""
+  changes = spec.failed_grasp_changes if failed_grasp_changes is None else failed_grasp_changes
+  retries = spec.failed_grasp_retries if failed_grasp_retries is None else failed_grasp_retries
+  if type(changes) is not bool:
+    raise DeployError(f'{where}: failed_grasp_changes {changes!r}: true or false expected')
+  low, high = FIELDS['failed_grasp_retries'][2]
+  if type(retries) is not int or not low <= retries <= high:
+    raise DeployError(f'{where}: failed_grasp_retries {retries!r}: a whole number in '
+                      f'{low}-{high} expected')
+  if retries and changes:
+    raise DeployError(f'{where}: failed_grasp_retries {retries} needs failed_grasp_changes false '
+                      '(with it true a failed grasp that moved the scene is change anyway)')
+  return dataclasses.replace(spec, failed_grasp_changes=changes, failed_grasp_retries=retries)
 
 
 

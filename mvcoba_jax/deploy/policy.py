@@ -28,12 +28,17 @@ class Action:
 
 class OnnxPolicy:
   """model.json and model.onnx of an export: the graph's greedy action on a state, given whether
-  the last action changed the scene, as `examples/onnx_infer.py` runs it."""
+  the last action changed the scene, as `examples/onnx_infer.py` runs it. `failed_grasp_changes`
+  and `failed_grasp_retries`, when given, replace model.json's change rule after a failed grasp
+  (`model_file.acting_rule`: what the rule does next, not what the network reads)."""
 
-  def __init__(self, folder):
+  def __init__(self, folder, failed_grasp_changes: bool | None = None,
+               failed_grasp_retries: int | None = None):
     import onnxruntime as ort  # noqa: PLC0415 (only a policy needs it, not the heightmaps)
     self.folder = folder = pathlib.Path(folder)
-    self.spec = model_file.read(folder)  # refuses a damaged, unknown or hand-broken model.json
+    # refuses a damaged, unknown or hand-broken model.json, or a rule that cannot be
+    self.spec = model_file.acting_rule(model_file.read(folder), failed_grasp_changes,
+                                       failed_grasp_retries)
     if not self.spec.graph_decides:
       raise DeployError(f'{folder / "model.json"}: format {self.spec.raw["format"]!r}: its graph '
                         'leaves the action rule to the runtime; export it again '

@@ -306,8 +306,8 @@ def test_a_failed_grasp_is_no_change_for_a_policy_trained_so(scenes, onnx):
   assert paper.changed(before, after, grasped=False)  # the paper's rule: the frames decide
   assert not onnx.spec.failed_grasp_changes and not onnx.changed(before, after, grasped=False)
   assert onnx.changed(before, after) and onnx.changed(before, before, grasped=True)
-  retrying = copy.copy(onnx)
-  retrying.spec = dataclasses.replace(onnx.spec, failed_grasp_retries=1)
+  retrying = OnnxPolicy(onnx.folder, failed_grasp_retries=1)  # acting under another rule
+  assert retrying.spec == dataclasses.replace(onnx.spec, failed_grasp_retries=1)
   assert retrying.changed(before, after, grasped=False)  # the first: the frames decide
   assert not retrying.changed(before, before, grasped=False)
   assert not retrying.changed(before, after, grasped=False, failed_grasps=1)

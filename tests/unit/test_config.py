@@ -172,6 +172,24 @@ def test_evaluation_overrides_change_physics_not_what_training_fixed():
       evaluated(trained, [f'{key}={value}'])
 
 
+def test_evaluation_may_change_the_rule_after_a_failed_grasp_not_what_the_network_reads():
+  """The `ACTING_RULE` fields pick the primitive after a failed grasp, which the network does
+  not read: a trained policy acts under other values at evaluation; retries without the push
+  after a failed grasp would change nothing and are refused, in training as at evaluation."""
+  trained = resolve('tiny', ['perception.failed_grasp_changes=false'])
+  acting = evaluated(trained, ['perception.failed_grasp_retries=2'])
+  assert acting.perception.failed_grasp_retries == 2 and acting.network == trained.network
+  assert evaluated(resolve('tiny'), ['perception.failed_grasp_changes=false']
+                   ).perception.failed_grasp_changes is False
+  with pytest.raises(ConfigError, match='failed_grasp_retries=1 needs '
+                                        'perception.failed_grasp_changes=false'):
+    evaluated(resolve('tiny'), ['perception.failed_grasp_retries=1'])
+  with pytest.raises(ConfigError, match='failed_grasp_retries=1 needs'):
+    resolve('tiny', ['perception.failed_grasp_retries=1'])
+  with pytest.raises(ConfigError, match=r'failed_grasp_retries=101: allowed range \[0, 100\]'):
+    evaluated(trained, ['perception.failed_grasp_retries=101'])
+
+
 def test_preset_files_that_are_not_python_or_whose_get_config_raises_are_one_line(tmp_path):
   from mvcoba_jax.config import load_preset
   (tmp_path / 'preset.json').write_text('{"seed": 1}')

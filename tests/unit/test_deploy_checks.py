@@ -148,3 +148,36 @@ def test_the_robot_loop_refuses_a_negative_count_before_loading(capsys):
   with pytest.raises(SystemExit) as e:
     loop.main(['--model', 'nowhere', '--actions', '-1'])
   assert e.value.code == 2 and 'at least 1 action' in capsys.readouterr().err
+
+
+def test_a_runtime_may_act_under_another_rule_after_a_failed_grasp_within_its_range(tmp_path,
+                                                                                     capsys):
+  """`model_file.acting_rule` (OnnxPolicy's keywords, the robot loop's flag): the retries after a
+  failed grasp replaced, as `mvcoba-eval --set` evaluates them; a count out of 0-100, not whole,
+  or set where a failed grasp is change anyway is refused in one line, before the network loads,
+  and so is a model.json holding such a pair."""
+  import importlib.util
+  import json
+  from mvcoba_jax.deploy import DeployError, model_file
+  shipped = model_file.read(SHIPPED / 'mvcoba')
+  assert not shipped.failed_grasp_changes and shipped.failed_grasp_retries == 0
+  assert model_file.acting_rule(shipped, failed_grasp_retries=1).failed_grasp_retries == 1
+  assert model_file.acting_rule(shipped) == shipped
+  for retries, match in ((-1, 'whole number in 0-100'), (101, 'whole number in 0-100'),
+                         (1.0, 'whole number'), (True, 'whole number')):
+    with pytest.raises(DeployError, match=match):
+      model_file.acting_rule(shipped, failed_grasp_retries=retries)
+  with pytest.raises(DeployError, match='needs failed_grasp_changes false'):
+    model_file.acting_rule(shipped, failed_grasp_changes=True, failed_grasp_retries=2)
+  described = json.loads((SHIPPED / 'mvcoba' / 'model.json').read_text())
+  described['config']['perception'].update(failed_grasp_changes=True, failed_grasp_retries=2)
+  (tmp_path / 'model.json').write_text(json.dumps(described))
+  with pytest.raises(DeployError, match='model.json: config.perception: failed_grasp_retries 2'):
+    model_file.read(tmp_path)
+  pytest.importorskip('onnxruntime')
+  spec = importlib.util.spec_from_file_location('robot_loop', SHIPPED.parent / 'examples' /
+                                                'robot_loop.py')
+  loop = importlib.util.module_from_spec(spec)
+  spec.loader.exec_module(loop)
+  assert loop.main(['--model', str(SHIPPED / 'mvcoba'), '--failed-grasp-retries', '101']) == 2
+  assert 'failed_grasp_retries 101: a whole number in 0-100' in capsys.readouterr().err
