@@ -38,7 +38,8 @@ def choose(session: ort.InferenceSession, color: np.ndarray, depth: np.ndarray,
 
 
 def to_world(action: dict, depth: np.ndarray, model: dict) -> dict:
-  """Adds angle and the world point (x, y, z) of the action, per model.json 'pixel_to_world'."""
+  """Adds angle, the world point (x, y, z) of the action, per model.json 'pixel_to_world', and
+  how far a push slides (the length it trained with; 0 for a grasp)."""
   hm = model['heightmap']
   res, half = hm['resolution_m'], hm['workspace_half_m']
   row, col = action['row'], action['col']
@@ -46,7 +47,9 @@ def to_world(action: dict, depth: np.ndarray, model: dict) -> dict:
   return {'primitive_name': names[action['primitive']], **action,
           'angle_rad': model['rotations']['angles_rad'][action['rotation']],
           'x': -half + (col + 0.5) * res, 'y': -half + (row + 0.5) * res,
-          'z': float(depth[hm['views_used'], row, col].max())}
+          'z': float(depth[hm['views_used'], row, col].max()),
+          'push_length_m': (model['config']['env']['push_length']
+                            if action['primitive'] == model['primitives']['push'] else 0.0)}
 
 
 def load_state(path: pathlib.Path, model: dict, fill_unseen: bool = False

@@ -185,7 +185,7 @@ def model_file_of(config: Config, method: methods.Method) -> model_file.ModelFil
       onnx_file='model.onnx', change_min=p.change_min, change_max=p.change_max,
       change_area=p.change_area, failed_grasp_changes=p.failed_grasp_changes,
       failed_grasp_retries=p.failed_grasp_retries,
-      fill_unseen=p.fill_unseen)
+      fill_unseen=p.fill_unseen, push_length_m=config.env.push_length)
 
 
 def _merged(described: dict, fields: dict) -> dict:

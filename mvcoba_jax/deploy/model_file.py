@@ -42,6 +42,7 @@ class ModelFile:
   failed_grasp_changes: bool  # False: a grasp that held nothing is no change ...
   failed_grasp_retries: int  # ... past this many such grasps in a row
   fill_unseen: bool  # each view's unseen cells filled from the others first
+  push_length_m: float  # how far a push slides along its angle, as in training
   raw: dict | None = dataclasses.field(default=None, compare=False)  # the whole file as read
 
 
@@ -66,6 +67,7 @@ FIELDS = {
     'failed_grasp_changes': ('config.perception.failed_grasp_changes', bool, None),
     'failed_grasp_retries': ('config.perception.failed_grasp_retries', int, (0, 100)),
     'fill_unseen': ('config.perception.fill_unseen', bool, None),
+    'push_length_m': ('config.env.push_length', float, (0.001, 1.0)),
 }
 ABSENT = {'height_unit_m': HEIGHT_UNIT, 'below_table_m': BELOW_TABLE,
           'failed_grasp_changes': True, 'failed_grasp_retries': 0, 'fill_unseen': False}

@@ -20,6 +20,7 @@ class Action:
   primitive: str  # 'push' or 'grasp'
   position: tuple[float, float, float]  # base frame: the cell's centre at its surface height
   angle: float  # base frame: the gripper's yaw and the push direction about +z
+  push_length: float  # m a push slides along `angle` (config.env.push_length); 0 for a grasp
   rotation: int
   row: int
   col: int
@@ -112,8 +113,9 @@ class OnnxPolicy:
       raise DeployError(f'refused: {e}') from None
     return Action(primitive='grasp' if primitive == spec.grasp else 'push',
                   position=tuple(float(v) for v in calibration.workspace_to_base((x, y, z))),
-                  angle=math.remainder(angle, 2 * math.pi), rotation=rotation, row=row, col=col,
-                  q=score)
+                  angle=math.remainder(angle, 2 * math.pi),
+                  push_length=0.0 if primitive == spec.grasp else spec.push_length_m,
+                  rotation=rotation, row=row, col=col, q=score)
 
   def changed(self, before, after, grasped: bool | None = None, failed_grasps: int = 0) -> bool:
     """Whether the last action changed the scene, as training observes it

@@ -102,8 +102,9 @@ def test_the_exported_policy_on_camera_images_acts_as_the_jax_policy(scenes, onn
   colour it takes the JAX policy's action on training's heightmaps in all 32; on heightmaps
   from 16-bit PNG depth it takes the JAX policy's action on those same heightmaps in at least 31
   (the millimetre steps alone move the argmax of near-equal Q values in about a third of these
-  states: docs/deploy.md); positions and angles are carried into the base frame; a frame a
-  camera saw nothing of and a grid of another size are refused."""
+  states: docs/deploy.md); positions and angles are carried into the base frame, a push with the
+  length it trained with; a frame a camera saw nothing of and a grid of another size are
+  refused."""
   env, _, images, observed = scenes
   jax_policy = policy.load(ROOT / 'pretrained' / 'mvcoba')
   base = np.array([[0, -1, 0, 0.4], [1, 0, 0, 0.1], [0, 0, 1, 0.0], [0, 0, 0, 1]])
@@ -119,6 +120,8 @@ def test_the_exported_policy_on_camera_images_acts_as_the_jax_policy(scenes, onn
                             changed, seen=np.asarray(observed.seen[b]))
       action = onnx.act(*metres, changed, cal)
       exact.append(key(action) == key(want))
+      trained = jax_policy.config.env.push_length if action.primitive == 'push' else 0.0
+      assert action.push_length == trained
       if exact[-1]:
         np.testing.assert_allclose(action.position[:2], (0.4 - want.y, 0.1 + want.x), atol=1e-6)
         assert math.isclose(math.remainder(action.angle - want.angle - math.pi / 2, 2 * math.pi),
