@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
-# What a user of `mvcoba-train` gets: the default preset (6000 actions), seed 0, from a worktree at
-# the commit that made it the default, evaluated like the reproduction (every shipped suite, 5 runs
-# per case, both protocols); resumable: run again after a stop.
+# What a user of `mvcoba-train` gets: the default preset (6000 actions), seed 0, evaluated like the
+# reproduction (every shipped suite, 5 runs per case, both protocols); resumable: run again after a
+# stop. Run before the default pushed 5 cm (f6b2cff), so the push is set; the config is the same.
 cd /work/win-tree
 export PYTHONPATH=/work/win-tree PATH=/work/main/.venv/bin:$PATH
-w=/work/pretrained-winning log=/work/pretrained-winning/runs.txt
+w=/work/pretrained-short log=/work/pretrained-short/runs.txt
 echo "start $(date -u +%FT%TZ) commit $(git rev-parse --short HEAD)" >> $log
 if [ ! -f $w/mvcoba-s0/eval_summary.json ]; then
   [ -d $w/mvcoba-s0/checkpoints ] && again=--resume || again=--overwrite
-  mvcoba-train --workdir $w/mvcoba-s0 $again > $w/train.log 2>&1 || { echo "train rc $?" >> $log; exit 1; }
+  mvcoba-train --set env.push_length=0.05 --workdir $w/mvcoba-s0 $again > $w/train.log 2>&1 || { echo "train rc $?" >> $log; exit 1; }
 fi
 echo "trained $(date -u +%FT%TZ)" >> $log
 for protocol in frozen online; do
@@ -20,4 +20,4 @@ for protocol in frozen online; do
   echo "evaluated $protocol $(date -u +%FT%TZ)" >> $log
 done
 echo "end $(date -u +%FT%TZ)" >> $log
-# Landed with: bash experiments/land_pretrained.sh /work/pretrained-winning fd55f64
+# Landed with: bash experiments/land_pretrained.sh /work/pretrained-short ea15ee5
