@@ -56,7 +56,7 @@ def test_presets_are_valid(preset):
     ('train.future_max=all', "train.future_max='all': allowed values are rule, both"),
     ('train.no_change_push_reward=-2', 'train.no_change_push_reward=-2.0: allowed range'),
     ('env.descend_speed=1e-300', 'env.approach_height / env.descend_speed = 8e+298 s'),
-    ('env.push_speed=0.0001', 'env.push_length / env.push_speed = 1e+03 s of simulated motion'),
+    ('env.push_speed=0.00005', 'env.push_length / env.push_speed = 1e+03 s of simulated motion'),
     ('train.batch_size=2000', 'train.batch_size=2000 exceeds train.replay_capacity=1024'),
 ])
 def test_bad_override_is_refused_naming_the_key(assignment, says):
