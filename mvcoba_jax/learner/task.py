@@ -97,8 +97,26 @@ class Task:
            per_env: Callable = _whole) -> tuple[State, Outcome]:
     """Executes `action` (B,) chosen on `state.obs` in every tabletop; returns the task after it
     and the outcome."""
+    world = self.to_world(action, state.obs.depth)
+    states, info = per_env(jax.vmap(self.env.step))(state.env, world)
+    return self._outcome(state, action, states, info, per_env)
+
+  def step_and_settle(self, state: State, action: agent.PixelAction, drops: EnvState, settle,
+                      per_env: Callable = _whole) -> tuple[State, Outcome, EnvState]:
+    """`step`, and the tabletops `drops` (B,) (`Tabletop.drop`) settled when `settle` (a bool),
+    in the same physics loop (`Tabletop.step_and_settle`): training's refill of fresh
+    tabletops; the third result is `drops`, settled or as they were."""
+    world = self.to_world(action, state.obs.depth)
+    b = drops.in_play.shape[0]
+    run = lambda s, a, d, f: jax.vmap(self.env.step_and_settle, in_axes=(0, 0, 0, None))(
+        s, a, d, f[0])  # one flag for the batch (each device's share of it, when sharded)
+    states, info, settled = per_env(run)(state.env, world, drops, jnp.broadcast_to(settle, (b,)))
+    return (*self._outcome(state, action, states, info, per_env), settled)
+
+  def _outcome(self, state: State, action: agent.PixelAction, states: EnvState, info: StepInfo,
+               per_env: Callable) -> tuple[State, Outcome]:
+    """The task's bookkeeping of `action`, taken in `state`, that left the tabletops `states`."""
     obs = state.obs
-    states, info = per_env(jax.vmap(self.env.step))(state.env, self.to_world(action, obs.depth))
     next_obs = self.observe(states, per_env)
     healthy = info.healthy
     changed = perception.change_observed(obs, next_obs, info.grasp_success,

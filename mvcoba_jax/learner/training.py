@@ -187,10 +187,14 @@ class Trainer:
     maps = agent.rule_maps(q, before.obs.depth, self.method, self.config)
     action, explored = agent.epsilon_greedy(maps, before.changed, occupied, eps, k_act,
                                             self.method)
-    after, out = self.task.step(before, action, self.per_env)
+    # Fresh tabletops for the reserve settle in the primitive's physics loop, when it runs low.
+    b = action.primitive.shape[0]
+    refill = reserve_lib.needs_refill(state.reserve, b)
+    drops = self.per_env(jax.vmap(self.task.env.drop))(jax.random.split(k_reset, b))
+    after, out, drops = self.task.step_and_settle(before, action, drops, refill, self.per_env)
     info, healthy, changed, done = out.info, out.info.healthy, out.changed, out.done
-    env_states, reserve = reserve_lib.swap_in(self.per_env(jax.vmap(self.task.env.reset)),
-                                              state.reserve, after.env, done, k_reset)
+    reserve = reserve_lib.refilled(state.reserve, drops, refill)
+    env_states, reserve = reserve_lib.swap_in(reserve, after.env, done)
     after = self.task.restart(after, done, env_states, self.per_env)
 
     transition = self.task.transition(before.obs, after, action, out)
@@ -207,7 +211,6 @@ class Trainer:
     else:
       store, add = transition, learn
     state, loss = self.learn(state, store, add, learn, k_learn)
-    b = done.shape[0]
     state = state.replace(
         task=after, reserve=reserve, key=key, actions=state.actions + b,
         episodes=state.episodes + jnp.sum(done, dtype=jnp.int32))

@@ -22,16 +22,24 @@ from mvcoba_jax.sim.physics import CAMERA_GROUPS, Parking, SimState  # noqa: E40
 from mvcoba_jax.sim.scene import Scene  # noqa: E402
 
 
-def stepped(model, data, ctrl, pin, parked, frames: tuple[int, ...], extra=lambda d: None):
-  """MJX's (or MuJoCo Warp's, through MJX) stepping of one tabletop through `ctrl` (T, nu), the
-  `parked` slots pinned after each step: the last Data, qpos after each step of `frames` (F, nq)
-  and `extra(data)` after every step, stacked (T, ...)."""
-  def body(d, c):
-    d = pin(mjx.step(model, d.replace(ctrl=c)), parked)
-    return d, (d.qpos if frames else None, extra(d))
-  data, (path, more) = jax.lax.scan(body, data, ctrl)
-  at = path[jnp.asarray(frames)] if frames else jnp.zeros((0,) + data.qpos.shape, jnp.float32)
-  return data, at, more
+def stepped(model, data, ctrl, pin, parked, frames: tuple[int, ...], steps=None,
+            extra=lambda d: ()):
+  """MJX's (or MuJoCo Warp's, through MJX) stepping of one tabletop through the first `steps`
+  rows of `ctrl` (T, nu) (all of them if None; a traced count makes the loop's length a run-time
+  value, so programs of different lengths share one compiled loop), the `parked` slots pinned
+  after each step: the last Data, qpos after each step of `frames` (F, nq) and the elementwise
+  maximum of `extra(data)` over the steps."""
+  marks = jnp.asarray(frames, jnp.int32)
+
+  def body(t, carry):
+    d, at, most = carry
+    d = pin(mjx.step(model, d.replace(ctrl=ctrl[t])), parked)
+    at = jnp.where((marks == t)[:, None], d.qpos, at)
+    return d, at, jax.tree.map(jnp.maximum, most, extra(d))
+
+  start = (data, jnp.zeros((len(frames),) + data.qpos.shape, data.qpos.dtype),
+           jax.tree.map(jnp.zeros_like, extra(data)))
+  return jax.lax.fori_loop(0, ctrl.shape[0] if steps is None else steps, body, start)
 
 
 class MjxPhysics:
@@ -48,11 +56,12 @@ class MjxPhysics:
     return mjx.make_data(self.model).replace(qpos=sim.qpos, qvel=sim.qvel,
                                              mocap_pos=sim.mocap_pos, mocap_quat=sim.mocap_quat)
 
-  def simulate(self, sim: SimState, parked, ctrl, frames: tuple[int, ...] = ()):
-    """Steps one tabletop through `ctrl` (T, nu); returns the state, whether MuJoCo was content
-    (MJX raises no warnings: always True; the caller checks finiteness) and qpos after each step
-    of `frames` (F, nq)."""
-    data, at, _ = stepped(self.model, self._data(sim), ctrl, self._parking.pin, parked, frames)
+  def simulate(self, sim: SimState, parked, ctrl, frames: tuple[int, ...] = (), steps=None):
+    """Steps one tabletop through the first `steps` rows of `ctrl` (T, nu) (all if None);
+    returns the state, whether MuJoCo was content (MJX raises no warnings: always True; the
+    caller checks finiteness) and qpos after each step of `frames` (F, nq)."""
+    data, at, _ = stepped(self.model, self._data(sim), ctrl, self._parking.pin, parked, frames,
+                          steps)
     return sim.replace(qpos=data.qpos, qvel=data.qvel), jnp.bool_(True), at
 
   def cast(self, sim: SimState, origins: np.ndarray, directions: np.ndarray):

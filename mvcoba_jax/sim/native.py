@@ -77,9 +77,13 @@ class NativePhysics:
 
   def _simulate_host(self, frames: tuple[int, ...], *arrays):
     # JAX hands over jax.Arrays on the CPU: viewed as NumPy (no copy), no JAX op runs in here.
-    qpos, qvel, mocap_pos, mocap_quat, parked, ctrl = (np.asarray(a) for a in arrays)
+    qpos, qvel, mocap_pos, mocap_quat, parked, ctrl, steps = (np.asarray(a) for a in arrays)
     lead = qpos.shape[:-1]
     n = math.prod(lead)
+    steps = int(np.max(steps, initial=0))  # one count for the batch
+    if steps == 0:
+      return qpos.copy(), qvel.copy(), np.ones(lead, bool), np.repeat(
+          qpos[..., None, :], len(frames), axis=-2)
     parked = parked.reshape(n, -1)
     ok = np.ones(n, bool)
     with self._batch(n) as b:
@@ -90,31 +94,33 @@ class NativePhysics:
       b.warning[:] = 0
       record = {}
       try:
-        record = b.rollout(ctrl.shape[-2], ctrl.reshape(n, ctrl.shape[-2], -1),
-                           record=('qpos',) if frames else ())
+        run = np.ascontiguousarray(ctrl.reshape(n, ctrl.shape[-2], -1)[:, :steps])
+        record = b.rollout(steps, run, record=('qpos',) if frames else ())
       except mjbatch.SimulationError as error:
         ok[error.ids] = False
       ok &= ~np.any(b.warning[..., 1] > 0, axis=-1)
       qpos_out = b.qpos.astype(np.float32).reshape(lead + qpos.shape[-1:])
       qvel_out = b.qvel.astype(np.float32).reshape(lead + qvel.shape[-1:])
       if 'qpos' in record:
-        at = record['qpos'][:, list(frames)]
+        at = record['qpos'][:, np.minimum(frames, steps - 1)]
       else:  # no pictures asked for, or the call failed: where it stopped
         at = np.repeat(b.qpos[:, None], len(frames), axis=1)
     return qpos_out, qvel_out, ok.reshape(lead), at.astype(np.float32).reshape(
         lead + (len(frames), qpos.shape[-1]))
 
-  def simulate(self, sim: SimState, parked, ctrl, frames: tuple[int, ...] = ()):
-    """Steps one tabletop through `ctrl` (T, nu) (vmap it: the host gets the batch in one call);
-    returns the state, whether MuJoCo ran it without a warning or an error, and qpos after each
-    step of `frames` (F, nq) (recorded only when asked: a few pictures of a primitive)."""
+  def simulate(self, sim: SimState, parked, ctrl, frames: tuple[int, ...] = (), steps=None):
+    """Steps one tabletop through the first `steps` rows of `ctrl` (T, nu) (all if None; vmap
+    it: the host gets the batch in one call); returns the state, whether MuJoCo ran it without a
+    warning or an error, and qpos after each step of `frames` (F, nq) (recorded only when
+    asked: a few pictures of a primitive)."""
+    steps = jnp.int32(ctrl.shape[-2]) if steps is None else steps
     shapes = (jax.ShapeDtypeStruct(sim.qpos.shape, jnp.float32),
               jax.ShapeDtypeStruct(sim.qvel.shape, jnp.float32),
               jax.ShapeDtypeStruct((), jnp.bool_),
               jax.ShapeDtypeStruct((len(frames),) + sim.qpos.shape, jnp.float32))
     qpos, qvel, ok, at = jax.pure_callback(
         functools.partial(self._simulate_host, tuple(frames)), shapes, sim.qpos, sim.qvel,
-        sim.mocap_pos, sim.mocap_quat, parked, ctrl, vmap_method='broadcast_all')
+        sim.mocap_pos, sim.mocap_quat, parked, ctrl, steps, vmap_method='broadcast_all')
     return sim.replace(qpos=qpos, qvel=qvel), ok, at
 
   def _cast_host(self, origins, directions, *arrays):

@@ -20,24 +20,28 @@ class Reserve:
   available: jnp.ndarray  # int32
 
 
-def _refill(reset_batch, reserve: Reserve, key, batch: int) -> Reserve:
-  fresh = reset_batch(jax.random.split(key, batch))
+def refilled(reserve: Reserve, fresh: EnvState, refill) -> Reserve:
+  """`reserve` with the B settled tabletops `fresh` added when `refill` (`needs_refill`)."""
+  batch = fresh.in_play.shape[0]
   states = jax.tree.map(
       lambda all_, new: jax.lax.dynamic_update_slice_in_dim(all_, new, reserve.available, 0),
       reserve.states, fresh)
-  return Reserve(states=states, available=reserve.available + batch)
+  states = jax.tree.map(lambda new, old: jnp.where(refill, new, old), states, reserve.states)
+  return Reserve(states=states, available=reserve.available + jnp.where(refill, batch, 0))
 
 
-def swap_in(reset_batch, reserve: Reserve, states: EnvState, mask, key):
-  """(states, reserve): every environment in `mask` gets a fresh tabletop from the reserve.
+def needs_refill(reserve: Reserve, batch: int):
+  """Whether the next `swap_in` of `batch` environments could find the reserve short."""
+  return reserve.available < batch
 
-  `reset_batch` maps B keys to B fresh states (`jax.vmap(env.reset)`, or its per-device form).
+
+def swap_in(reserve: Reserve, states: EnvState, mask):
+  """(states, reserve): every environment in `mask` (B,) gets a fresh tabletop from the
+  reserve, which must hold B (`needs_refill`, `refilled`).
 
   Unhealthy environments swapped out are counted in `health_resets`, which carries over.
   """
   batch = mask.shape[0]
-  reserve = jax.lax.cond(reserve.available < batch, lambda r: _refill(reset_batch, r, key, batch),
-                         lambda r: r, reserve)
   rank = jnp.cumsum(mask) - 1
   source = jnp.clip(reserve.available - 1 - rank, 0, 2 * batch - 1)
   drawn = jax.tree.map(lambda x: x[source], reserve.states)

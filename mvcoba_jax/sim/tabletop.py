@@ -261,8 +261,13 @@ class Tabletop:
 
   def reset(self, key) -> EnvState:
     """Drops `env.num_objects` random objects and lets them settle."""
+    return self.settle(self.drop(key))
+
+  def drop(self, key) -> EnvState:
+    """`env.num_objects` random objects at their drop spots, before any physics (`reset`
+    settles them)."""
     key, k_layout = jax.random.split(key)
-    return self.reset_from_case(self.sample_layout(k_layout), key)
+    return self.place(self.sample_layout(k_layout), key)
 
   def place(self, layout: Layout, key=None) -> EnvState:
     """The objects of `layout` exactly where it puts them, without physics (for pictures)."""
@@ -288,21 +293,62 @@ class Tabletop:
     the objects coming to rest; those that leave the workspace leave play uncounted (a drop
     that lands off the table is not a loss)."""
     steps = self.config.env.settle_steps if steps is None else steps
-    hold = jnp.broadcast_to(self._gripper_park, (steps, 6))
-    sim, healthy, _ = self._simulate(state.sim, state.in_play, hold)
+    sim, healthy, _ = self._simulate(state.sim, state.in_play, self._hold(steps))
+    return self._settled(state, sim, healthy)
+
+  def _hold(self, steps: int):
+    return jnp.broadcast_to(self._gripper_park, (steps, 6))
+
+  def _settled(self, state: EnvState, sim: SimState, healthy) -> EnvState:
     in_play = state.in_play & self._in_workspace(sim)
     return state.replace(sim=self._finish(sim, in_play), in_play=in_play, healthy=healthy)
 
   # ----------------------------------------------------------------------------- step
   def step(self, state: EnvState, action: Action) -> tuple[EnvState, StepInfo]:
     """Executes one primitive and does the bookkeeping of picked and lost objects."""
+    sim, ctrl = self._begin(state, action)
+    after, healthy, frames = self._simulate(sim, state.in_play, ctrl, self.frames)
+    return self._outcome(state, action, sim, after, healthy, frames)
+
+  def step_and_settle(self, state: EnvState, action: Action, drop: EnvState, settle
+                      ) -> tuple[EnvState, StepInfo, EnvState]:
+    """`step(state, action)` and, when `settle` (a bool shared by the batch), `settle(drop)`,
+    in one physics loop run twice: the primitive's steps, then the settling's (none without
+    `settle`, and `drop` comes back as it went). A compiled program holding both pays for one
+    traced physics loop instead of two (docs/results/mjx-compile.md)."""
+    sim, ctrl = self._begin(state, action)
+    hold = self._hold(self.config.env.settle_steps)
+    length = max(ctrl.shape[0], hold.shape[0])
+    pad = lambda c: jnp.concatenate([c, jnp.zeros((length - c.shape[0], 6))])  # rows not run
+    phases = (jax.tree.map(lambda *x: jnp.stack(x), sim, drop.sim),
+              jnp.stack([~state.in_play, ~drop.in_play]), jnp.stack([pad(ctrl), pad(hold)]),
+              jnp.stack([jnp.int32(ctrl.shape[0]),
+                         jnp.where(settle, hold.shape[0], 0).astype(jnp.int32)]))
+
+    def phase(_, inputs):
+      return None, self.backend.simulate(*inputs[:3], self.frames, inputs[3])
+
+    _, (sims, ok, frames) = jax.lax.scan(phase, None, phases)
+    after, settled = (jax.tree.map(lambda x, i=i: x[i], sims) for i in range(2))
+    state, info = self._outcome(state, action, sim, after, ok[0] & self._health(after),
+                                frames[0])
+    drop = jax.tree.map(lambda new, old: jnp.where(settle, new, old),
+                        self._settled(drop, settled, ok[1] & self._health(settled)), drop)
+    return state, info, drop
+
+  def _begin(self, state: EnvState, action: Action):
+    """The gripper at the primitive's start pose, and its actuator targets (T, 6)."""
     env = self.config.env
     sim = self._place_gripper(state.sim, primitives.start_pose(action, env))
-    z_before = sim.qpos[self._qpos_idx[:, 2]]
     ctrl = jax.vmap(lambda t: primitives.target(self.script, action, env, t))(
         jnp.arange(self.script.length))
-    sim, healthy, frames = self._simulate(sim, state.in_play, ctrl, self.frames)
+    return sim, ctrl
 
+  def _outcome(self, state: EnvState, action: Action, before: SimState, sim: SimState, healthy,
+               frames) -> tuple[EnvState, StepInfo]:
+    """The bookkeeping of a primitive run from `before` to `sim`: picked and lost objects."""
+    env = self.config.env
+    z_before = before.qpos[self._qpos_idx[:, 2]]
     z_after = sim.qpos[self._qpos_idx[:, 2]]
     fingers = sim.qpos[self._grip_qpos[4:]]
     holding = jnp.sum(fingers) > 0.003  # fingers stopped on something: not closed fully

@@ -137,24 +137,27 @@ class WarpPhysics:
   def _data(self, template: mjx.Data, qpos, qvel, mocap_pos, mocap_quat) -> mjx.Data:
     return template.replace(qpos=qpos, qvel=qvel, mocap_pos=mocap_pos, mocap_quat=mocap_quat)
 
-  def simulate(self, sim: SimState, parked, ctrl, frames: tuple[int, ...] = ()):
-    """Steps one tabletop through `ctrl` (T, nu) (vmap it: Warp gets the batch in one program);
-    returns the state, whether its contacts fitted the arena, and qpos after each step of
-    `frames` (F, nq)."""
+  def simulate(self, sim: SimState, parked, ctrl, frames: tuple[int, ...] = (), steps=None):
+    """Steps one tabletop through the first `steps` rows of `ctrl` (T, nu) (all if None; vmap
+    it: Warp gets the batch in one program); returns the state, whether its contacts fitted the
+    arena, and qpos after each step of `frames` (F, nq)."""
     frames = tuple(frames)
     if frames not in self._simulators:  # one wrapper per frames, not one per call
       self._simulators[frames] = batched(functools.partial(self._simulate_batch, frames))
     run = self._simulators[frames]
-    qpos, qvel, ok, at = run(sim.qpos, sim.qvel, sim.mocap_pos, sim.mocap_quat, parked, ctrl)
+    steps = jnp.int32(ctrl.shape[-2]) if steps is None else steps
+    qpos, qvel, ok, at = run(sim.qpos, sim.qvel, sim.mocap_pos, sim.mocap_quat, parked, ctrl,
+                             steps)
     return sim.replace(qpos=qpos, qvel=qvel), ok, at
 
-  def _simulate_batch(self, frames, qpos, qvel, mocap_pos, mocap_quat, parked, ctrl):
+  def _simulate_batch(self, frames, qpos, qvel, mocap_pos, mocap_quat, parked, ctrl, steps):
     template = self._template(qpos.shape[0])
     pin = self._parking.pin
+    steps = jnp.max(steps)  # one count for the batch (`batched` hands it to every world)
 
     def world(qp, qv, mp, mq, pk, c):
       d, at, (nefc, nacon) = stepped(self.model, self._data(template, qp, qv, mp, mq), c, pin,
-                                     pk, frames, _filled)
+                                     pk, frames, steps, _filled)
       return d.qpos, d.qvel, jnp.max(nefc), jnp.max(nacon), at
 
     qpos, qvel, nefc, nacon, at = jax.vmap(world)(qpos, qvel, mocap_pos, mocap_quat, parked, ctrl)

@@ -58,7 +58,7 @@ def test_concurrent_callers_get_the_results_of_callers_one_at_a_time():
   parked = ~np.asarray(states.in_play)
   call = lambda i: env.backend._simulate_host((), sim.qpos[i:i + 1], sim.qvel[i:i + 1],
                                               sim.mocap_pos[i:i + 1], sim.mocap_quat[i:i + 1],
-                                              parked[i:i + 1], hold[i:i + 1])
+                                              parked[i:i + 1], hold[i:i + 1], np.int32(200))
   alone = [call(i) for i in range(4)]
   with concurrent.futures.ThreadPoolExecutor(4) as pool:
     together = list(pool.map(call, range(4)))

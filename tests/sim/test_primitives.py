@@ -153,12 +153,33 @@ def test_unhealthy_env_is_detected_reset_and_counted(env, compiled, outcome):
   # The reserve: the outcome's own start states (settled drops) stand in for fresh ones.
   spare = reserve_lib.Reserve(states=jax.tree.map(lambda x: jnp.concatenate([x, x]), start),
                               available=jnp.int32(2 * b))
-  swap = jax.jit(lambda s, r, m: reserve_lib.swap_in(jax.vmap(env.reset), r, s, m,
-                                                     jax.random.PRNGKey(0)))
-  healed, spare = swap(after, spare, ~info.healthy)
+  healed, spare = jax.jit(reserve_lib.swap_in)(spare, after, ~info.healthy)
   assert np.asarray(healed.healthy).all() and int(spare.available) == 2 * b - 2
   assert np.asarray(healed.health_resets).tolist() == [1, 1] + [0] * (b - 2)
   assert np.isfinite(np.asarray(healed.sim.qpos[:2])).all()
   np.testing.assert_array_equal(np.asarray(healed.sim.qpos[:2]),  # the reserve's top two
                                 np.asarray(start.sim.qpos)[[b - 1, b - 2]])
   np.testing.assert_array_equal(np.asarray(healed.sim.qpos[2:]), np.asarray(after.sim.qpos[2:]))
+
+
+def test_step_and_settle_ends_as_step_and_settle_apart(env, compiled, outcome):
+  """Training's one physics loop (a primitive, then fresh drops settling in the same loop) ends
+  where `step` and `settle` run apart on the same batch end; without `settle` the drops come
+  back untouched."""
+  i = [outcome['index'][n] for n in ('grasp0', 'push0')]
+  start = jax.tree.map(lambda x: x[np.asarray(i)], outcome['start'])
+  act = actions([(GRASP, 0, *CUBE_AT, 0.05), (PUSH, 0, -0.05, 0.0, 0.05)])
+  drops = jax.jit(jax.vmap(env.drop))(jax.random.split(jax.random.PRNGKey(4), 2))
+  both = jax.jit(jax.vmap(env.step_and_settle, in_axes=(0, 0, 0, None)))
+  stepped, info, settled = both(start, act, drops, True)
+  alone, _ = compiled[1](start, act)
+  apart = jax.jit(jax.vmap(env.settle))(drops)
+  assert np.asarray(info.grasp_success).tolist() == [True, False]
+  for got, want in ((stepped, alone), (settled, apart)):
+    np.testing.assert_allclose(np.asarray(got.sim.qpos), np.asarray(want.sim.qpos), atol=1e-4)
+    assert np.array_equal(np.asarray(got.in_play), np.asarray(want.in_play))
+  assert not np.allclose(np.asarray(settled.sim.qpos), np.asarray(drops.sim.qpos), atol=1e-3)
+  stepped, _, kept = both(start, act, drops, False)
+  np.testing.assert_allclose(np.asarray(stepped.sim.qpos), np.asarray(alone.sim.qpos), atol=1e-4)
+  for got, want in zip(jax.tree.leaves(kept), jax.tree.leaves(drops)):
+    assert np.array_equal(np.asarray(got), np.asarray(want))
