@@ -122,10 +122,10 @@ class Tabletop:
     return sim.replace(qpos=sim.qpos.at[self._grip_qpos].set(pose),
                        qvel=sim.qvel.at[self._grip_qvel].set(0.0))
 
-  def _simulate(self, sim: SimState, in_play, ctrl, frames: tuple[int, ...] = ()):
-    """Steps through the actuator targets `ctrl` (T, 6); also whether the physics stayed sound,
-    and qpos after each step of `frames`."""
-    sim, ok, at = self.backend.simulate(sim, ~in_play, ctrl, frames)
+  def _simulate(self, sim: SimState, in_play, ctrl, frames: tuple[int, ...] = (), steps=None):
+    """Steps through the first `steps` actuator targets of `ctrl` (T, 6) (all if None); also
+    whether the physics stayed sound, and qpos after each step of `frames`."""
+    sim, ok, at = self.backend.simulate(sim, ~in_play, ctrl, frames, steps)
     return sim, ok & self._health(sim), at
 
   def _health(self, sim: SimState):
@@ -321,19 +321,19 @@ class Tabletop:
     length = max(ctrl.shape[0], hold.shape[0])
     pad = lambda c: jnp.concatenate([c, jnp.zeros((length - c.shape[0], 6))])  # rows not run
     phases = (jax.tree.map(lambda *x: jnp.stack(x), sim, drop.sim),
-              jnp.stack([~state.in_play, ~drop.in_play]), jnp.stack([pad(ctrl), pad(hold)]),
+              jnp.stack([state.in_play, drop.in_play]), jnp.stack([pad(ctrl), pad(hold)]),
               jnp.stack([jnp.int32(ctrl.shape[0]),
                          jnp.where(settle, hold.shape[0], 0).astype(jnp.int32)]))
 
     def phase(_, inputs):
-      return None, self.backend.simulate(*inputs[:3], self.frames, inputs[3])
+      start, in_play, targets, steps = inputs
+      return None, self._simulate(start, in_play, targets, self.frames, steps)
 
     _, (sims, ok, frames) = jax.lax.scan(phase, None, phases)
     after, settled = (jax.tree.map(lambda x, i=i: x[i], sims) for i in range(2))
-    state, info = self._outcome(state, action, sim, after, ok[0] & self._health(after),
-                                frames[0])
+    state, info = self._outcome(state, action, sim, after, ok[0], frames[0])
     drop = jax.tree.map(lambda new, old: jnp.where(settle, new, old),
-                        self._settled(drop, settled, ok[1] & self._health(settled)), drop)
+                        self._settled(drop, settled, ok[1]), drop)
     return state, info, drop
 
   def _begin(self, state: EnvState, action: Action):
