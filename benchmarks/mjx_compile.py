@@ -2,12 +2,11 @@
 (issue 69): the primitive's physics (`Tabletop.step`, one loop of MJX steps), a fresh drop
 (`Tabletop.reset`: the drop's settling loop), both cameras' rays and heightmaps
 (`Task.observe`), the reset and the step as two loops in one program (`reset_and_step`) and as
-the training step runs them, one loop run twice (`step_and_settle`), and the whole training
-iteration (`Trainer.iterate`, `train.steps_per_iteration` steps), on the backend asked for, each
-with its tracing and lowering time, XLA's compile time and one run after it. Prints one JSON
-object.
+the training step runs them, one loop run twice (`step_and_settle`), on the backend asked for,
+each with its tracing and lowering time, XLA's compile time and one run after it (the whole
+training iteration's compile: `benchmarks/train.py`). Prints one JSON object.
 
-  python benchmarks/mjx_compile.py [--config default] [--backend mjx] [--batch 8] [--no-iteration]
+  python benchmarks/mjx_compile.py [--config default] [--backend mjx] [--batch 8]
 """
 from __future__ import annotations
 
@@ -21,7 +20,6 @@ from mvcoba_jax import methods
 from mvcoba_jax.config import resolve
 from mvcoba_jax.learner import agent
 from mvcoba_jax.learner.task import Task
-from mvcoba_jax.learner.training import Trainer
 
 
 def compiled(fn, *args) -> dict:
@@ -43,10 +41,8 @@ def main(argv=None) -> int:
   parser.add_argument('--config', default='default')
   parser.add_argument('--backend', default='mjx')
   parser.add_argument('--batch', type=int, default=8)
-  parser.add_argument('--no-iteration', dest='iteration', action='store_false',
-                      help='leave out the whole training iteration (the longest compile)')
   args = parser.parse_args(argv)
-  config = resolve(args.config, [f'scene.backend={args.backend}', f'num_envs={args.batch}'])
+  config = resolve(args.config, [f'scene.backend={args.backend}'])
   task = Task.build(config, methods.get(config.network.method).views)
   env = task.env
   keys = jax.random.split(jax.random.PRNGKey(0), args.batch)
@@ -64,11 +60,6 @@ def main(argv=None) -> int:
   drops = jax.jit(jax.vmap(env.drop))(keys)
   row['step_and_settle'], _ = compiled(
       jax.vmap(env.step_and_settle, in_axes=(0, 0, 0, None)), states, action, drops, True)
-  if args.iteration:
-    trainer = Trainer(config)
-    state = jax.jit(trainer.init)(jax.random.PRNGKey(0))
-    row['steps_per_iteration'] = config.train.steps_per_iteration
-    row['iteration'], _ = compiled(trainer.iterate, state, True, -1.0)
   print(json.dumps(row, indent=1))
   return 0
 
