@@ -40,7 +40,7 @@ def bench(config, batch: int, target: str, backend: str, repeats: int) -> dict:
   trainer = Trainer(config)
   state, init_first, _ = timed(jax.jit(trainer.init), jax.random.PRNGKey(0), repeats=0)
   args = (jnp.bool_(True), jnp.float32(-1.0))
-  (state, _), it_first, it_wall = timed(jax.jit(trainer.iterate), state, *args, repeats=repeats)
+  (state, _), it_first, it_wall = timed(trainer.compiled(), state, *args, repeats=repeats)
   k = config.train.steps_per_iteration
 
   q = jax.jit(trainer.q_maps)

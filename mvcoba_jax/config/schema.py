@@ -99,7 +99,7 @@ class NetworkConfig:
 class TrainConfig:
   """Q-learning."""
   total_actions: int = 3000  # counted over all environments
-  steps_per_iteration: int = 4  # lockstep actions per compiled call (lax.scan length)
+  steps_per_iteration: int = 4  # lockstep actions per call (`Trainer.compiled`)
   learning_rate: float = 1e-4
   momentum: float = 0.9
   weight_decay: float = 2e-5

@@ -1,6 +1,6 @@
 """A training run into its work directory, and a sweep of them: `train` is mvcoba-train's call
-(`mvcoba_jax.train`), around the jitted `Trainer.iterate` of `training.py`: the folder held,
-checkpoints restored and written atomically, one log line per action and per compiled call,
+(`mvcoba_jax.train`), around `Trainer.compiled` of `training.py`: the folder held,
+checkpoints restored and written atomically, one log line per action and per call of K actions,
 TensorBoard scalars, the curves and a closing greedy check."""
 from __future__ import annotations
 
@@ -56,8 +56,9 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
   """Trains `config` into `workdir` to `config.train.total_actions`, then a short greedy check.
 
   The work directory gets config.json, actions.jsonl (a line per action), metrics.jsonl (a line
-  per compiled call; its scalars also as TensorBoard events in tensorboard/), atomic checkpoints
-  every `train.checkpoint_every` calls and at the end, curves.png and eval_summary.json.
+  per call of K actions; its scalars also as TensorBoard events in tensorboard/), atomic
+  checkpoints every `train.checkpoint_every` calls and at the end, curves.png and
+  eval_summary.json.
   `resume` continues from its latest checkpoint; a directory holding an earlier run is refused
   unless `resume` or `overwrite` (which deletes it first).
   Raises TrainError before anything compiles when the config, directory or checkpoint cannot
@@ -139,11 +140,11 @@ def _train(config: Config, trainer: Trainer, devices, workdir: pathlib.Path, res
   """`train` once its work directory is held."""
   runtime.setup()
   checkpoints = Checkpoints(workdir)  # every process takes part in saving its shards
-  iterate = jax.jit(trainer.iterate)
+  iterate = trainer.compiled()
   per_iteration = config.num_envs * config.train.steps_per_iteration
   say = print if progress else (lambda *a, **k: None)
   say(f'{config.network.method}: {config.num_envs} tabletops x '
-      f'{config.train.steps_per_iteration} actions per compiled call on the '
+      f'{config.train.steps_per_iteration} actions per call on the '
       f'{trainer.task.env.backend.name} backend; compiling (cached after the first time)...',
       flush=True)
   state, records = _start(config, trainer, checkpoints, workdir, resume, lead, say)

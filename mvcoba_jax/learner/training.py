@@ -1,4 +1,4 @@
-"""One jit-compiled training step for B tabletops in lockstep, and a scan of K of them.
+"""One jit-compiled training step for B tabletops in lockstep, and K of them per call.
 
 act -> primitive physics -> render -> heightmaps -> change observation -> reward -> replay write
 -> sample -> SGD update -> auto-reset of finished environments. The whole training state is one
@@ -6,6 +6,7 @@ pytree (`TrainState`), so a checkpoint is that pytree and resuming is exact.
 """
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import jax
@@ -237,15 +238,17 @@ class Trainer:
     state, losses = jax.lax.scan(lambda s, k: self.update(s, k, enabled, fresh), state, keys)
     return state, jnp.mean(losses)
 
-  def iterate(self, state: TrainState, learn, epsilon) -> tuple[TrainState, StepLog]:
-    """`train.steps_per_iteration` lockstep actions in one compiled call (StepLog gains a K axis).
+  def iterate(self, state: TrainState, learn, epsilon, steps: int | None = None
+              ) -> tuple[TrainState, StepLog]:
+    """`steps` (`train.steps_per_iteration` if None) lockstep actions in one program (StepLog
+    gains a K axis); `compiled` is how training calls it.
 
     On a CPU the K steps are written out one after the other, not looped: XLA's CPU backend runs
     the SGD update inside a loop body (a `lax.scan`, even of length 1) or a `lax.cond` branch 3-5
     times slower than outside one (at B=8, 7.6 s per step looped, 1.9 s written out), at the
     price of compiling K steps. Accelerators keep the loop and its short compile.
     """
-    k = self.config.train.steps_per_iteration
+    k = self.config.train.steps_per_iteration if steps is None else steps
     if jax.default_backend() != 'cpu':
       return jax.lax.scan(lambda s, _: self.step(s, learn, epsilon), state, None, length=k)
     logs = []
@@ -253,3 +256,29 @@ class Trainer:
       state, log = self.step(state, learn, epsilon)
       logs.append(log)
     return state, jax.tree.map(lambda *steps: jnp.stack(steps), *logs)
+
+  @property
+  def per_step(self) -> bool:
+    """Whether `compiled` calls the one-step program K times rather than one program of K steps:
+    on a CPU with physics traced into the program (MJX), where the K written-out steps would hold
+    K copies of MJX's step and collision functions (262 s to compile at 8 tabletops against 72 s
+    for one step, as many actions/s: docs/results/mjx-compile.md). Native physics is a host
+    call, cheap to compile, and its K written-out steps run 8-20 % faster than K calls."""
+    return jax.default_backend() == 'cpu' and self.task.env.backend.traced
+
+  def compiled(self, per_step: bool | None = None):
+    """`iterate` compiled: a function (state, learn, epsilon) -> (state, StepLog) of
+    `train.steps_per_iteration` actions per call, from one program of the K steps or, with
+    `per_step` (`self.per_step` if None), from the one-step program called K times."""
+    if not (self.per_step if per_step is None else per_step):
+      return jax.jit(self.iterate)
+    one = jax.jit(functools.partial(self.iterate, steps=1))
+    k = self.config.train.steps_per_iteration
+
+    def iterate(state: TrainState, learn, epsilon) -> tuple[TrainState, StepLog]:
+      logs = []
+      for _ in range(k):
+        state, log = one(state, learn, epsilon)
+        logs.append(log)
+      return state, jax.tree.map(lambda *steps: jnp.concatenate(steps), *logs)
+    return iterate

@@ -46,6 +46,7 @@ class MjxPhysics:
   """MJX: the whole simulation is traced into the jitted program (the path for accelerators)."""
 
   name = 'mjx'
+  traced = True  # each call site compiles MJX's step and collision functions into its program
 
   def __init__(self, scene: Scene, parking: Parking):
     # This process's own device: jax.devices()[0], MJX's default, may belong to another process.

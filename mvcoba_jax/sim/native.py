@@ -39,6 +39,7 @@ class NativePhysics:
   """MuJoCo's C engine on a thread pool: the path for CPUs."""
 
   name = 'native'
+  traced = False  # a host call: a program holds only the call
 
   def __init__(self, scene: Scene):
     m = scene.mj_model

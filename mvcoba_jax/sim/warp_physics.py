@@ -89,6 +89,7 @@ class WarpPhysics:
   """MuJoCo Warp through MJX and its batch renderer: one world per tabletop."""
 
   name = 'warp'
+  traced = False  # Warp's kernels, compiled by Warp: XLA compiles only the calls to them
 
   def __init__(self, scene: Scene, parking: Parking):
     m = scene.mj_model

@@ -45,6 +45,28 @@ def trained(trainer, iterate):
   return state, logs
 
 
+def test_one_step_program_called_k_times_trains_as_the_k_step_program(trainer, iterate):
+  """`compiled(per_step=True)`, MJX's form on a CPU, takes the course of one program of K."""
+  state = jax.jit(trainer.init)(jax.random.PRNGKey(0))
+  args = (jnp.bool_(True), jnp.float32(-1.0))
+  whole, log_whole = iterate(state, *args)
+  per, log_per = trainer.compiled(per_step=True)(state, *args)
+  k = trainer.config.train.steps_per_iteration
+  assert np.asarray(log_per.primitive).shape == (k, trainer.config.num_envs)
+  for name in ('primitive', 'grasp_success', 'changed', 'reward', 'done', 'explored'):
+    np.testing.assert_array_equal(getattr(log_per, name), getattr(log_whole, name), err_msg=name)
+  np.testing.assert_allclose(log_per.loss, log_whole.loss, rtol=1e-4)
+  assert int(per.actions) == int(whole.actions) and int(per.updates) == int(whole.updates)
+  assert int(per.replay.size) == int(whole.replay.size) > 0
+  for a, b in zip(jax.tree.leaves(per.params), jax.tree.leaves(whole.params)):
+    np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-6)
+
+
+def test_physics_traced_into_the_program_compiles_one_step_on_a_cpu(trainer):
+  mjx = Trainer(resolve(TINY, ['scene.backend=mjx']))
+  assert mjx.per_step and not trainer.per_step  # the tiny preset runs native physics
+
+
 def test_training_steps_fill_the_replay_and_update(trainer, trained):
   state, logs = trained
   b, k = trainer.config.num_envs, trainer.config.train.steps_per_iteration
