@@ -88,6 +88,17 @@ def action(q: float, angle: float, position: tuple[float, float, float], half: f
                   f'm, 0 to {top:g} m)')
 
 
+def push_length(start: tuple[float, float], angle: float, length: float, half: float) -> float:
+  """How far a push from `start` (x, y) along `angle` (both in the workspace frame) may slide, up
+  to `length`, and end within +-half: cut short at the workspace's edge, as VPG's robot code cuts
+  it, so no push sweeps past the region the cameras were calibrated on."""
+  reach = [length]
+  for at, step in zip(start, (math.cos(angle), math.sin(angle))):
+    if abs(step) > 1e-12:
+      reach.append(((half if step > 0 else -half) - at) / step)
+  return max(0.0, min(reach))
+
+
 def _numbers(values, name: str) -> np.ndarray:
   try:
     array = np.asarray(values)

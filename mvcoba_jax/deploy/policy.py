@@ -20,7 +20,8 @@ class Action:
   primitive: str  # 'push' or 'grasp'
   position: tuple[float, float, float]  # base frame: the cell's centre at its surface height
   angle: float  # base frame: the gripper's yaw and the push direction about +z
-  push_length: float  # m a push slides along `angle` (config.env.push_length); 0 for a grasp
+  push_length: float  # m a push slides along `angle`: config.env.push_length, cut short at the
+  # workspace's edge (`checks.push_length`); 0 for a grasp
   rotation: int
   row: int
   col: int
@@ -87,7 +88,8 @@ class OnnxPolicy:
     heightmaps of another grid or number of views than the policy's, heights not in metres or
     colour out of its range (`checks.observation`; non-finite cells count as unseen), a frame
     where a camera saw none of the workspace, or when the action has a non-finite score or would
-    leave the workspace or go below the table (`checks.action`)."""
+    leave the workspace or go below the table (`checks.action`); a push ends at the workspace's
+    edge at the farthest (`checks.push_length`)."""
     self.check(calibration)
     spec = self.spec
     res, half = spec.resolution_m, spec.workspace_half_m
@@ -111,10 +113,11 @@ class OnnxPolicy:
       checks.action(score, angle, (x, y, z), half, calibration.top)
     except checks.Refused as e:
       raise DeployError(f'refused: {e}') from None
+    push = checks.push_length((x, y), spec.angles_rad[rotation], spec.push_length_m, half)
     return Action(primitive='grasp' if primitive == spec.grasp else 'push',
                   position=tuple(float(v) for v in calibration.workspace_to_base((x, y, z))),
                   angle=math.remainder(angle, 2 * math.pi),
-                  push_length=0.0 if primitive == spec.grasp else spec.push_length_m,
+                  push_length=0.0 if primitive == spec.grasp else push,
                   rotation=rotation, row=row, col=col, q=score)
 
   def changed(self, before, after, grasped: bool | None = None, failed_grasps: int = 0) -> bool:

@@ -60,6 +60,19 @@ def test_an_unsafe_action_is_refused(q, angle, position, match):
   checks.action(1.0, 0.5, (0.2, -0.2, 0.1), HALF, TOP)  # a sound one passes
 
 
+def test_a_push_is_cut_short_at_the_workspace_edge():
+  assert checks.push_length((0.0, 0.0), 0.3, 0.1, HALF) == 0.1  # well inside: as trained
+  assert math.isclose(checks.push_length((HALF - 0.04, 0.0), 0.0, 0.1, HALF), 0.04)
+  assert math.isclose(checks.push_length((0.0, -HALF + 0.03), -math.pi / 2, 0.1, HALF), 0.03)
+  corner = checks.push_length((HALF - 0.02, HALF - 0.05), math.pi / 4, 0.1, HALF)
+  assert math.isclose(corner, 0.02 * math.sqrt(2))  # the nearer edge along the diagonal
+  assert checks.push_length((HALF - 0.01, 0.0), math.pi, 0.1, HALF) == 0.1  # inwards: as trained
+  for angle in np.linspace(-math.pi, math.pi, 17):  # wherever it starts, it ends inside
+    length = checks.push_length((HALF - 0.005, -HALF + 0.005), angle, 0.1, HALF)
+    end = (HALF - 0.005 + length * math.cos(angle), -HALF + 0.005 + length * math.sin(angle))
+    assert 0 <= length <= 0.1 and max(abs(v) for v in end) <= HALF + 1e-12
+
+
 SHIPPED = __import__('pathlib').Path(__file__).resolve().parents[2] / 'pretrained'
 ODD = [None, 'x', -1, 2 ** 70, 1e300, True, [], {}, [[1]], 0.5]
 FIELDS = ('format', 'primitives.push', 'primitives.grasp',
