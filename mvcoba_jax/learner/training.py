@@ -261,9 +261,9 @@ class Trainer:
   def per_step(self) -> bool:
     """Whether `compiled` calls the one-step program K times rather than one program of K steps:
     on a CPU with physics traced into the program (MJX), where the K written-out steps would hold
-    K copies of MJX's step and collision functions (262 s to compile at 8 tabletops against 72 s
-    for one step, as many actions/s: docs/results/mjx-compile.md). Native physics is a host
-    call, cheap to compile, and its K written-out steps run 8-20 % faster than K calls."""
+    K copies of MJX's step and collision functions (at 8 tabletops and K=4, 249 s to compile
+    against 88-95 s, for about 10 % more time per step: docs/results/mjx-compile.md). Native
+    physics is a host call, cheap to compile, and its K written-out steps run 8-20 % faster."""
     return jax.default_backend() == 'cpu' and self.task.env.backend.traced
 
   def compiled(self, per_step: bool | None = None):
