@@ -263,7 +263,7 @@ class Trainer:
     on a CPU with physics traced into the program (MJX), where the K written-out steps would hold
     K copies of MJX's step and collision functions (at 8 tabletops and K=4, 249 s to compile
     against 88-95 s, for about 10 % more time per step: docs/results/mjx-compile.md). Native
-    physics is a host call, cheap to compile, and its K written-out steps run 8-20 % faster."""
+    physics is a host call, cheap to compile, and K calls of its one step ran 6-28 % slower."""
     return jax.default_backend() == 'cpu' and self.task.env.backend.traced
 
   def compiled(self, per_step: bool | None = None):
