@@ -113,11 +113,12 @@ class OnnxPolicy:
       checks.action(score, angle, (x, y, z), half, calibration.top)
     except checks.Refused as e:
       raise DeployError(f'refused: {e}') from None
-    push = checks.push_length((x, y), spec.angles_rad[rotation], spec.push_length_m, half)
-    return Action(primitive='grasp' if primitive == spec.grasp else 'push',
+    grasp = primitive == spec.grasp
+    push = 0.0 if grasp else checks.push_length((x, y), spec.angles_rad[rotation],
+                                                 spec.push_length_m, half)
+    return Action(primitive='grasp' if grasp else 'push',
                   position=tuple(float(v) for v in calibration.workspace_to_base((x, y, z))),
-                  angle=math.remainder(angle, 2 * math.pi),
-                  push_length=0.0 if primitive == spec.grasp else push,
+                  angle=math.remainder(angle, 2 * math.pi), push_length=push,
                   rotation=rotation, row=row, col=col, q=score)
 
   def changed(self, before, after, grasped: bool | None = None, failed_grasps: int = 0) -> bool:

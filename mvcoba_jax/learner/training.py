@@ -238,24 +238,19 @@ class Trainer:
     state, losses = jax.lax.scan(lambda s, k: self.update(s, k, enabled, fresh), state, keys)
     return state, jnp.mean(losses)
 
-  def iterate(self, state: TrainState, learn, epsilon, steps: int | None = None
-              ) -> tuple[TrainState, StepLog]:
-    """`steps` (`train.steps_per_iteration` if None) lockstep actions in one program (StepLog
-    gains a K axis); `compiled` is how training calls it.
+  def iterate(self, state: TrainState, learn, epsilon) -> tuple[TrainState, StepLog]:
+    """`train.steps_per_iteration` lockstep actions in one program (StepLog gains a K axis);
+    `compiled` is how training calls it.
 
     On a CPU the K steps are written out one after the other, not looped: XLA's CPU backend runs
     the SGD update inside a loop body (a `lax.scan`, even of length 1) or a `lax.cond` branch 3-5
     times slower than outside one (at B=8, 7.6 s per step looped, 1.9 s written out), at the
     price of compiling K steps. Accelerators keep the loop and its short compile.
     """
-    k = self.config.train.steps_per_iteration if steps is None else steps
+    k = self.config.train.steps_per_iteration
     if jax.default_backend() != 'cpu':
       return jax.lax.scan(lambda s, _: self.step(s, learn, epsilon), state, None, length=k)
-    logs = []
-    for _ in range(k):
-      state, log = self.step(state, learn, epsilon)
-      logs.append(log)
-    return state, jax.tree.map(lambda *steps: jnp.stack(steps), *logs)
+    return _one_after_another(self.step, k, state, learn, epsilon)
 
   @property
   def per_step(self) -> bool:
@@ -272,13 +267,16 @@ class Trainer:
     `per_step` (`self.per_step` if None), from the one-step program called K times."""
     if not (self.per_step if per_step is None else per_step):
       return jax.jit(self.iterate)
-    one = jax.jit(functools.partial(self.iterate, steps=1))
-    k = self.config.train.steps_per_iteration
+    return functools.partial(_one_after_another, jax.jit(self.step),
+                             self.config.train.steps_per_iteration)
 
-    def iterate(state: TrainState, learn, epsilon) -> tuple[TrainState, StepLog]:
-      logs = []
-      for _ in range(k):
-        state, log = one(state, learn, epsilon)
-        logs.append(log)
-      return state, jax.tree.map(lambda *steps: jnp.concatenate(steps), *logs)
-    return iterate
+
+def _one_after_another(step, k: int, state: TrainState, learn, epsilon
+                       ) -> tuple[TrainState, StepLog]:
+  """`k` calls of `step` (traced: written out in one program; jitted: k calls of its program),
+  their logs stacked on a leading K axis."""
+  logs = []
+  for _ in range(k):
+    state, log = step(state, learn, epsilon)
+    logs.append(log)
+  return state, jax.tree.map(lambda *steps: jnp.stack(steps), *logs)

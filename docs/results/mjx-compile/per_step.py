@@ -17,13 +17,12 @@ config = resolve('default', [f'num_envs={b}', f'scene.backend={backend}'])
 trainer = Trainer(config)
 t = time.perf_counter(); state = jax.block_until_ready(jax.jit(trainer.init)(jax.random.PRNGKey(0))); init_s = time.perf_counter() - t
 if form == 'donate':
-  import functools
-  one = jax.jit(functools.partial(trainer.iterate, steps=1), donate_argnums=0)
+  one = jax.jit(trainer.step, donate_argnums=0)
   def it(state, learn, epsilon):
     logs = []
     for _ in range(config.train.steps_per_iteration):
       state, log = one(state, learn, epsilon); logs.append(log)
-    return state, jax.tree.map(lambda *x: jnp.concatenate(x), *logs)
+    return state, jax.tree.map(lambda *x: jnp.stack(x), *logs)
 else:
   it = trainer.compiled(per_step=form == 'per_step')
 args = (jnp.bool_(True), jnp.float32(-1.0))
