@@ -3,13 +3,16 @@
 Settles `n` random drops of the default preset on the native backend for `env.settle_steps`,
 recording every step, and prints per rest threshold (linear m/s, angular rad/s, every in-play
 object below both): the step after which each drop stays at rest (percentiles), the share
-still moving in the last 25 steps, what a batch of 8 in lockstep would save (the loop ends when
-its last drop rests), and how far an object moves after its drop came to rest.
+still moving in the last 25 steps and the shapes moving at the end, what a batch of 8 in
+lockstep would save (the loop ends when its last drop rests), and how far an object moves
+after its drop came to rest. `--condim 6 --rolling R`: the same drops with MuJoCo's rolling
+friction on (every geom's contact dimension 6, rolling friction R metres).
 
   python docs/results/primitive-steps/settle_rest.py 128 > settle-rest.jsonl
 """
+import argparse
+import collections
 import json
-import sys
 
 import jax
 import mujoco
@@ -19,10 +22,19 @@ from mujoco import batch as mjbatch
 from mvcoba_jax.config import resolve
 from mvcoba_jax.sim.tabletop import Tabletop
 
-n = int(sys.argv[1]) if len(sys.argv) > 1 else 128
+parser = argparse.ArgumentParser()
+parser.add_argument('drops', type=int, nargs='?', default=128)
+parser.add_argument('--condim', type=int, default=None)
+parser.add_argument('--rolling', type=float, default=None)
+args = parser.parse_args()
+n = args.drops
 env = Tabletop(resolve(None, ['scene.backend=native']).tabletop)
 drops = jax.jit(jax.vmap(env.drop))(jax.random.split(jax.random.PRNGKey(0), n))
 m, index, steps = env.scene.mj_model, env.scene.index, env.config.env.settle_steps
+if args.condim is not None:
+  m.geom_condim[:] = args.condim
+if args.rolling is not None:
+  m.geom_friction[:, 2] = args.rolling
 in_play = np.asarray(drops.in_play)
 
 b = mjbatch.Batch(m, n, nthread=2)  # loaded as NativePhysics loads a settling call
@@ -47,10 +59,14 @@ for v_rest, w_rest in [(0.005, 0.05), (0.01, 0.1), (0.02, 0.2)]:
   after = np.array([np.linalg.norm(pos[i, -1] - pos[i, min(rest[i], steps - 1)], axis=-1)
                     [in_play[i]].max() for i in range(n)])
   lockstep = rest[:n // 8 * 8].reshape(-1, 8).max(1)
+  shapes = collections.Counter(index.slot_shapes[j] for j in np.nonzero(moving[:, -1:] & (
+      (lin[:, -1] > v_rest) | (ang[:, -1] > w_rest)))[1])
   print(json.dumps({
-      'drops': n, 'settle_steps': steps, 'v_rest': v_rest, 'w_rest': w_rest,
+      'drops': n, 'settle_steps': steps, 'condim': int(m.geom_condim.max()),
+      'rolling_friction': float(m.geom_friction[:, 2].max()), 'v_rest': v_rest, 'w_rest': w_rest,
       'rest_step_p50_p90_max': np.percentile(rest, [50, 90, 100]).tolist(),
       'moving_in_last_25_steps': round(float(moving[:, -25:].any(1).mean()), 3),
       'lockstep_8_steps_saved': round(float(np.mean(steps - lockstep)), 1),
       'moved_after_rest_m_p99_max': [round(float(np.percentile(after, 99)), 4),
-                                     round(float(after.max()), 4)]}), flush=True)
+                                     round(float(after.max()), 4)],
+      'moving_at_the_end_by_shape': dict(shapes.most_common())}), flush=True)
