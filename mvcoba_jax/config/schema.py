@@ -183,6 +183,16 @@ class Config:
     return TabletopConfig(scene=self.scene, env=self.env)
 
   @property
+  def actions_per_call(self) -> int:
+    """Actions one call of the compiled training iteration takes: every tabletop, K times."""
+    return self.num_envs * self.train.steps_per_iteration
+
+  @property
+  def actions_trained(self) -> int:
+    """What a run of `train.total_actions` trains: whole calls, so up to one call more."""
+    return -(-self.train.total_actions // self.actions_per_call) * self.actions_per_call
+
+  @property
   def updates_per_step(self) -> int:
     """SGD updates after each lockstep action: 1, or with `train.replay_ratio` as many batches
     as sample that many replayed transitions per new one (at least 1)."""

@@ -129,8 +129,8 @@ def resumable(config: Config, workdir: pathlib.Path) -> None:
     raise TrainError(f'resume: the config differs from {path} in {", ".join(changed)}; only '
                      f'{", ".join(RESUME_MAY_CHANGE)} may change on resume (train a new run '
                      'for another recipe)')
-  done, per_call = latest_step(workdir), config.num_envs * config.train.steps_per_iteration
-  if -(-config.train.total_actions // per_call) * per_call < done:  # whole calls, as trained
+  done = latest_step(workdir)
+  if config.actions_trained < done:
     raise TrainError(f'resume: train.total_actions={config.train.total_actions} is below the '
                      f'{done} actions its latest checkpoint holds')
 
@@ -141,7 +141,7 @@ def _train(config: Config, trainer: Trainer, devices, workdir: pathlib.Path, res
   runtime.setup()
   checkpoints = Checkpoints(workdir)  # every process takes part in saving its shards
   iterate = trainer.compiled()
-  per_iteration = config.num_envs * config.train.steps_per_iteration
+  per_iteration = config.actions_per_call
   say = print if progress else (lambda *a, **k: None)
   say(f'{config.network.method}: {config.num_envs} tabletops x '
       f'{config.train.steps_per_iteration} actions per call on the '
@@ -155,7 +155,7 @@ def _train(config: Config, trainer: Trainer, devices, workdir: pathlib.Path, res
   total = config.train.total_actions
   start, done_before = time.perf_counter(), int(state.actions)
   iteration = done_before // per_iteration
-  with tqdm(total=total, initial=done_before, unit='action', desc='training',
+  with tqdm(total=config.actions_trained, initial=done_before, unit='action', desc='training',
             disable=not (lead and progress)) as bar:
     while int(state.actions) < total:
       t0 = time.perf_counter()

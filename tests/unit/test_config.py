@@ -210,6 +210,16 @@ def test_replay_ratio_sets_the_updates_per_lockstep_action():
   assert resolve('default', ['num_envs=2', 'train.replay_ratio=0.5']).updates_per_step == 1
 
 
+def test_a_run_trains_whole_calls_of_every_tabletop_k_times():
+  """What the progress bar counts to and a resume checks against: total_actions rounded up to
+  whole calls of num_envs x steps_per_iteration."""
+  for total, trained in ((6000, 6016), (6016, 6016), (1, 32)):
+    config = resolve('default', [f'train.total_actions={total}'])
+    assert (config.actions_per_call, config.actions_trained) == (32, trained)
+  assert resolve('default', ['num_envs=3', 'train.steps_per_iteration=1',
+                             'train.total_actions=10']).actions_trained == 12
+
+
 def test_a_preset_that_exits_is_a_config_error(tmp_path):
   preset = tmp_path / 'quits.py'
   preset.write_text('import sys\nsys.exit(3)\n')
