@@ -5,12 +5,15 @@ import json
 import os
 import pathlib
 import subprocess
+import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
 def test_the_device_script_runs_every_row_at_tiny_sizes(tmp_path):
-  env = {**os.environ, 'OUT': str(tmp_path), 'WHEELS': str(tmp_path / 'no-wheels')}
+  # The script's `python` is this interpreter's, however pytest was started (a venv not activated).
+  path = f'{pathlib.Path(sys.executable).parent}{os.pathsep}{os.environ.get("PATH", "")}'
+  env = {**os.environ, 'PATH': path, 'OUT': str(tmp_path), 'WHEELS': str(tmp_path / 'no-wheels')}
   done = subprocess.run(['bash', str(ROOT / 'benchmarks' / 'device.sh'), '--tiny'], env=env,
                         capture_output=True, text=True, timeout=900)
   assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
