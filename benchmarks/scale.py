@@ -36,7 +36,7 @@ t = time.perf_counter()
 for _ in range(iterations):
   state, _ = jax.block_until_ready(iterate(state, *args))
 wall = time.perf_counter() - t
-actions = iterations * config.num_envs * config.train.steps_per_iteration
+actions = iterations * config.actions_per_call
 print(json.dumps({'devices': len(jax.devices()), 'platform': jax.devices()[0].platform,
                   'num_envs': config.num_envs, 'actions_per_s': actions / wall,
                   'first_call_s': compile_s}))
