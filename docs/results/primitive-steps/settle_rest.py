@@ -15,11 +15,11 @@ import collections
 import json
 
 import jax
-import mujoco
 import numpy as np
 from mujoco import batch as mjbatch
 
 from mvcoba_jax.config import resolve
+from mvcoba_jax.sim.native import NativePhysics
 from mvcoba_jax.sim.tabletop import Tabletop
 
 parser = argparse.ArgumentParser()
@@ -38,14 +38,11 @@ if args.rolling is not None:
 in_play = np.asarray(drops.in_play)
 
 b = mjbatch.Batch(m, n, nthread=2)  # loaded as NativePhysics loads a settling call
-b.state[:] = 0.0
-b.qpos[:], b.qvel[:] = np.asarray(drops.sim.qpos), np.asarray(drops.sim.qvel)
-b.mocap_pos[:] = np.asarray(drops.sim.mocap_pos).reshape(b.mocap_pos.shape)
-b.mocap_quat[:] = np.asarray(drops.sim.mocap_quat).reshape(b.mocap_quat.shape)
-slots = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, f'obj{i}') for i in range(env.num_slots)]
+NativePhysics._load(b, *(np.asarray(x) for x in (drops.sim.qpos, drops.sim.mocap_pos,
+                                                 drops.sim.mocap_quat, drops.sim.qvel)))
 gravcomp = b.expand('body_gravcomp')
 gravcomp[:] = m.body_gravcomp
-gravcomp[:, slots] = ~in_play
+gravcomp[:, env.backend._slot_bodies] = ~in_play
 hold = np.broadcast_to(np.asarray(env._gripper_park, np.float64), (n, steps, 6)).copy()
 record = b.rollout(steps, hold, record=('qvel', 'qpos'))
 
