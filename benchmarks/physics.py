@@ -91,7 +91,8 @@ def raw_rows(env: Tabletop, states, actions: Action, repeats: int) -> dict:
   m, script, b = env.scene.mj_model, env.script, actions.x.shape[0]
   ts = jnp.arange(script.length)
   ctrl = np.asarray(jax.vmap(lambda a: jax.vmap(
-      lambda t: primitives.target(script, a, env.config.env, t))(ts))(actions), np.float64)
+      lambda t: primitives.target(script, a, env.config.env, env.config.scene.workspace_half,
+                                  t))(ts))(actions), np.float64)
   start = np.asarray(jax.vmap(lambda a: primitives.start_pose(a, env.config.env))(actions))
   qpos = np.asarray(states.sim.qpos, np.float64)
   qpos[:, env.scene.index.gripper_qpos] = start

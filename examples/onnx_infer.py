@@ -23,7 +23,7 @@ import sys
 import numpy as np
 import onnxruntime as ort
 
-from mvcoba_jax.deploy import DeployError, model_file
+from mvcoba_jax.deploy import DeployError, checks, model_file
 from mvcoba_jax.deploy.heightmaps import filled
 
 
@@ -39,17 +39,19 @@ def choose(session: ort.InferenceSession, color: np.ndarray, depth: np.ndarray,
 
 def to_world(action: dict, depth: np.ndarray, model: dict) -> dict:
   """Adds angle, the world point (x, y, z) of the action, per model.json 'pixel_to_world', and
-  how far a push slides (the length it trained with; 0 for a grasp)."""
+  how far a push slides (the length it trained with, cut at the workspace's edge as the simulator
+  cuts it: `checks.push_length`; 0 for a grasp)."""
   hm = model['heightmap']
   res, half = hm['resolution_m'], hm['workspace_half_m']
   row, col = action['row'], action['col']
   names = {v: k for k, v in model['primitives'].items()}
-  return {'primitive_name': names[action['primitive']], **action,
-          'angle_rad': model['rotations']['angles_rad'][action['rotation']],
-          'x': -half + (col + 0.5) * res, 'y': -half + (row + 0.5) * res,
-          'z': float(depth[hm['views_used'], row, col].max()),
-          'push_length_m': (model['config']['env']['push_length']
-                            if action['primitive'] == model['primitives']['push'] else 0.0)}
+  angle = model['rotations']['angles_rad'][action['rotation']]
+  x, y = -half + (col + 0.5) * res, -half + (row + 0.5) * res
+  push = action['primitive'] == model['primitives']['push']
+  return {'primitive_name': names[action['primitive']], **action, 'angle_rad': angle, 'x': x,
+          'y': y, 'z': float(depth[hm['views_used'], row, col].max()),
+          'push_length_m': float(checks.push_length((x, y), angle, model['config']['env'][
+              'push_length'], half)) if push else 0.0}
 
 
 def load_state(path: pathlib.Path, model: dict, fill_unseen: bool = False

@@ -28,7 +28,8 @@ class Rig:
     raise NotImplementedError
 
   def execute(self, action: Action) -> bool | None:
-    """Moves the robot through the primitive (a grasp closes and lifts, a push slides 10 cm);
+    """Moves the robot through the primitive (a grasp closes and lifts, a push slides
+    `action.push_length` along `action.angle`);
     after a grasp, whether the gripper holds something (its opening, say), else None."""
     raise NotImplementedError
 

@@ -46,6 +46,9 @@ class Decision:
   y: float
   z: float  # the highest surface the method's views see in the cell
   q: float  # the rule's score of the action
+  # m a push slides along `angle`: env.push_length cut at the workspace's edge, as the simulator
+  # and the robot cut it (`deploy.checks.push_length`); 0 for a grasp
+  push_length: float
 
 
 class Policy(typing.NamedTuple):
@@ -90,12 +93,14 @@ class Policy(typing.NamedTuple):
                                jnp.asarray([bool(changed)]), method, config)
     world = agent.to_world(pick, depth, method.views, config.perception.heightmap_resolution,
                            half)
-    k = int(pick.rotation[0])
-    decision = Decision(primitive=('push', 'grasp')[int(pick.primitive[0])], rotation=k,
-                        angle=float(rotation_angle(k, config.env.num_rotations)),
-                        row=int(pick.row[0]), col=int(pick.col[0]), x=float(world.x[0]),
-                        y=float(world.y[0]), z=float(world.z[0]),
-                        q=float(score[0]))
+    k, primitive = int(pick.rotation[0]), ('push', 'grasp')[int(pick.primitive[0])]
+    angle, x, y = float(rotation_angle(k, config.env.num_rotations)), float(world.x[0]), \
+        float(world.y[0])
+    push = 0.0 if primitive == 'grasp' else float(
+        checks.push_length((x, y), angle, config.env.push_length, half))
+    decision = Decision(primitive=primitive, rotation=k, angle=angle, row=int(pick.row[0]),
+                        col=int(pick.col[0]), x=x, y=y, z=float(world.z[0]), q=float(score[0]),
+                        push_length=push)
     try:
       checks.action(decision.q, decision.angle, (decision.x, decision.y, decision.z), half, top)
     except checks.Refused as e:

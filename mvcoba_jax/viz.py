@@ -8,6 +8,7 @@ import jax
 import numpy as np
 
 from mvcoba_jax import perception
+from mvcoba_jax.deploy import checks
 from mvcoba_jax.learner.task import Task
 from mvcoba_jax.sim import cameras
 from mvcoba_jax.sim.geometry import rotation_angle
@@ -69,7 +70,8 @@ def run_strip(trace, run: int, task: Task, scale: int = 3) -> np.ndarray:
   top to bottom with the action drawn on them: a push as an arrow along its direction, a grasp
   as a bar across the fingers' closing line (green if it lifted an object, red if not)."""
   cell, env = task.perception.heightmap_resolution, task.env.config.env
-  push_length, finger_span = env.push_length / cell * scale, MAX_OPENING / cell * scale
+  border = task.env.config.scene.workspace_half
+  finger_span = MAX_OPENING / cell * scale
   frames = []
   for t in np.flatnonzero(np.asarray(trace.active[run])):
     views = [cv2.resize(np.ascontiguousarray(v[..., ::-1]), None, fx=scale, fy=scale,
@@ -81,8 +83,10 @@ def run_strip(trace, run: int, task: Task, scale: int = 3) -> np.ndarray:
       half = finger_span / 2 * np.array([-np.sin(yaw), np.cos(yaw)])
       ends = (centre - half, centre + half)
       color = GRASP_OK_COLOR if bool(trace.grasp_success[run, t]) else GRASP_FAILED_COLOR
-    else:  # push: from the pixel along (cos, sin)
-      ends = (centre, centre + push_length * np.array([np.cos(yaw), np.sin(yaw)]))
+    else:  # push: from the pixel along (cos, sin), as far as it went (cut at the border)
+      start = -border + centre / scale * cell
+      length = float(checks.push_length(start, yaw, env.push_length, border)) / cell * scale
+      ends = (centre, centre + length * np.array([np.cos(yaw), np.sin(yaw)]))
       color = PUSH_COLOR
     a, b = (tuple(int(round(v)) for v in e) for e in ends)
     for view in views:

@@ -114,8 +114,8 @@ class OnnxPolicy:
     except checks.Refused as e:
       raise DeployError(f'refused: {e}') from None
     grasp = primitive == spec.grasp
-    push = 0.0 if grasp else checks.push_length((x, y), spec.angles_rad[rotation],
-                                                 spec.push_length_m, half)
+    push = 0.0 if grasp else float(checks.push_length((x, y), spec.angles_rad[rotation],
+                                                       spec.push_length_m, half))
     return Action(primitive='grasp' if grasp else 'push',
                   position=tuple(float(v) for v in calibration.workspace_to_base((x, y, z))),
                   angle=math.remainder(angle, 2 * math.pi), push_length=push,

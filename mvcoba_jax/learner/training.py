@@ -7,10 +7,12 @@ pytree (`TrainState`), so a checkpoint is that pytree and resuming is exact.
 from __future__ import annotations
 
 import functools
+import hashlib
 from typing import Any
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from flax import nnx, struct
 from jax.sharding import Mesh, PartitionSpec
 
@@ -280,3 +282,22 @@ def _one_after_another(step, k: int, state: TrainState, learn, epsilon
     state, log = step(state, learn, epsilon)
     logs.append(log)
   return state, jax.tree.map(lambda *steps: jnp.stack(steps), *logs)
+
+
+def course_fingerprint(trainer: Trainer, calls: int = 2, iterate=None) -> str:
+  """A short hash of the course `calls` calls of training take from `config.seed`, as
+  mvcoba-train takes them: every call's StepLog, then the parameters and every tabletop's
+  positions, bit for bit. A change of training's numerics by one float32 rounding changes it, and
+  a run of 6000 actions then follows another course; `pretrained/mvcoba/course.json` holds the
+  tiny preset's fingerprint at the commit that trained the shipped policy, and a test holds the
+  two equal, so such a change retrains it. `iterate`: `trainer.compiled()`, if already built."""
+  iterate = iterate or trainer.compiled()
+  state = jax.jit(trainer.init)(jax.random.PRNGKey(trainer.config.seed))
+  digest = hashlib.sha256()
+  for _ in range(calls):
+    state, log = iterate(state, jnp.bool_(True), jnp.float32(-1.0))
+    for leaf in jax.tree.leaves(log):
+      digest.update(np.asarray(leaf).tobytes())
+  for leaf in jax.tree.leaves((state.params, state.task.env.sim.qpos)):
+    digest.update(np.asarray(leaf).tobytes())
+  return digest.hexdigest()[:16]

@@ -338,9 +338,9 @@ class Tabletop:
 
   def _begin(self, state: EnvState, action: Action):
     """The gripper at the primitive's start pose, and its actuator targets (T, 6)."""
-    env = self.config.env
+    env, half = self.config.env, self.config.scene.workspace_half
     sim = self._place_gripper(state.sim, primitives.start_pose(action, env))
-    ctrl = jax.vmap(lambda t: primitives.target(self.script, action, env, t))(
+    ctrl = jax.vmap(lambda t: primitives.target(self.script, action, env, half, t))(
         jnp.arange(self.script.length))
     return sim, ctrl
 

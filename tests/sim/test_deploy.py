@@ -103,7 +103,7 @@ def test_the_exported_policy_on_camera_images_acts_as_the_jax_policy(scenes, onn
   from 16-bit PNG depth it takes the JAX policy's action on those same heightmaps in at least 31
   (the millimetre steps alone move the argmax of near-equal Q values in about a third of these
   states: docs/deploy.md); positions and angles are carried into the base frame, a push with the
-  length it trained with (cut short only at the workspace's edge); a frame a camera saw nothing
+  length it trained with (cut short only at the workspace's edge, as the JAX policy cuts it); a frame a camera saw nothing
   of and a grid of another size are refused."""
   env, _, images, observed = scenes
   jax_policy = policy.load(ROOT / 'pretrained' / 'mvcoba')
@@ -124,7 +124,8 @@ def test_the_exported_policy_on_camera_images_acts_as_the_jax_policy(scenes, onn
       cell = [-cal.half + (i + 0.5) * cal.resolution for i in (action.col, action.row)]
       inside = max(abs(v) for v in cell) < cal.half - trained  # no edge within a push's reach
       assert action.push_length == trained if inside else 0 <= action.push_length <= trained
-      if exact[-1]:
+      if exact[-1]:  # one push contract: both policies cut a push the same way
+        assert math.isclose(action.push_length, want.push_length, abs_tol=1e-9)
         np.testing.assert_allclose(action.position[:2], (0.4 - want.y, 0.1 + want.x), atol=1e-6)
         assert math.isclose(math.remainder(action.angle - want.angle - math.pi / 2, 2 * math.pi),
                             0.0, abs_tol=1e-6)

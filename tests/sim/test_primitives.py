@@ -130,6 +130,17 @@ def test_push_separates_a_block_from_a_row(env, outcome):
     assert np.linalg.norm(moved[other, :2]) < 0.02, f'slot {other} dragged {moved[other, :2]}'
 
 
+def test_a_push_stops_at_the_workspace_edge(env):
+  """The simulator's push follows the robot's contract (`deploy.checks.push_length`): the fingers
+  slide the trained length from well inside, and stop at the border from 3 cm before it."""
+  half, length = env.config.scene.workspace_half, env.config.env.push_length
+  for x0, end in ((0.0, length), (half - 0.03, half)):
+    action = jax.tree.map(lambda v: v[0], actions([(PUSH, 0, x0, 0.0, 0.05)]))
+    _, ctrl = env._begin(env.place(layout(env, [(CUBE, 0.1, 0.1, 0.0)])), action)
+    np.testing.assert_allclose(float(np.asarray(ctrl)[-1, 0]), end, atol=1e-6)
+    assert np.asarray(ctrl)[:, 0].max() <= max(end, x0) + 1e-6
+
+
 def test_push_over_the_border_loses_the_cube(outcome):
   """Lost: out of play, counted, named in the step's mask, not picked."""
   info, end, i = outcome['info'], outcome['end'], outcome['index']['edge']

@@ -1,5 +1,6 @@
 """The jitted training step, the learner, and mvcoba-train end to end on the tiny preset."""
 import json
+import pathlib
 import shutil
 import signal
 import subprocess
@@ -19,9 +20,10 @@ from mvcoba_jax.config import resolve
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.learner import replay as replay_lib
 from mvcoba_jax.learner.checkpoint import Checkpoints
-from mvcoba_jax.learner.training import Trainer
+from mvcoba_jax.learner.training import Trainer, course_fingerprint
 
 TINY = 'tiny'
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope='module')
@@ -510,3 +512,16 @@ def test_a_checkpoint_the_disk_refuses_is_one_line_and_the_earlier_one_resumes(t
   assert Checkpoints(workdir).latest() == 4
   (workdir / 'actions.jsonl').write_text('{"action": 0}\n')
   assert run(workdir, '--resume', '--set', 'train.total_actions=8') == 2
+
+
+def test_the_shipped_policy_was_trained_with_todays_numerics(trainer, iterate):
+  """A fresh mvcoba-train gives pretrained/mvcoba: the tiny preset's first two calls take, bit
+  for bit, the course they took at the commit that trained the shipped policy
+  (`course_fingerprint`, recorded in its course.json by experiments/land_pretrained.sh). When
+  training's numerics change, this fails until the shipped policy is trained again."""
+  recorded = json.loads((ROOT / 'pretrained' / 'mvcoba' / 'course.json').read_text())
+  got = course_fingerprint(trainer, recorded['calls'], iterate)
+  assert got == recorded['fingerprint'], (
+      f'the tiny course is now {got}, {recorded["fingerprint"]} when pretrained/mvcoba was '
+      f'trained (at {recorded["commit"]}): training\'s numerics changed; train the shipped '
+      'policy again (docs/results/pretrained-mvcoba/run.sh, experiments/land_pretrained.sh)')

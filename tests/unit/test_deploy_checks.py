@@ -73,6 +73,21 @@ def test_a_push_is_cut_short_at_the_workspace_edge():
     assert 0 <= length <= 0.1 and max(abs(v) for v in end) <= HALF + 1e-12
 
 
+def test_the_simulator_cuts_a_push_by_the_same_rule():
+  """One push contract: jitted over JAX arrays (as `sim.primitives.target` calls it) the rule
+  gives the robot's lengths, to float32's precision."""
+  import jax  # noqa: PLC0415 (the deploy checks themselves need no JAX)
+  import jax.numpy as jnp  # noqa: PLC0415
+  rng = np.random.default_rng(0)
+  starts = rng.uniform(-HALF, HALF, (64, 2))
+  angles = rng.uniform(-math.pi, math.pi, 64)
+  cut = jax.jit(jax.vmap(lambda s, a: checks.push_length((s[0], s[1]), a, 0.1, HALF, xp=jnp)))
+  simulated = np.asarray(cut(jnp.asarray(starts, jnp.float32), jnp.asarray(angles, jnp.float32)))
+  robot = [checks.push_length(tuple(s), a, 0.1, HALF) for s, a in zip(starts, angles)]
+  np.testing.assert_allclose(simulated, robot, atol=1e-6)
+  assert (simulated < 0.1 - 1e-3).sum() >= 10  # some of them cut
+
+
 SHIPPED = __import__('pathlib').Path(__file__).resolve().parents[2] / 'pretrained'
 ODD = [None, 'x', -1, 2 ** 70, 1e300, True, [], {}, [[1]], 0.5]
 FIELDS = ('format', 'primitives.push', 'primitives.grasp',
