@@ -105,7 +105,7 @@ def idle_share(results: str) -> dict:
 
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  parser.add_argument('--suite', nargs='+', default=['random', 'ordered', 'occluded'])
+  parser.add_argument('--suite', nargs='+', default=['dev-random', 'dev-ordered', 'dev-occluded'])
   parser.add_argument('--repeats', type=int, default=3)
   parser.add_argument('--results', default='docs/results/six-methods/results.json',
                       help="an evaluation's results.json, for the share of finished runs' steps")

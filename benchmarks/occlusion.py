@@ -22,7 +22,7 @@ from mvcoba_jax.suites.visibility import visibility
 
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  parser.add_argument('--suite', default='occluded')
+  parser.add_argument('--suite', default='dev-occluded')
   parser.add_argument('--seen', type=float, default=0.5,
                       help='an object counts as seen by a camera above this visible fraction')
   args = parser.parse_args()

@@ -56,7 +56,7 @@ def suite_costs(suite: str, source, runs: int) -> dict:
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--checkpoint', required=True, help='a training work directory or export')
-  parser.add_argument('--suite', nargs='+', default=['ordered', 'occluded'])
+  parser.add_argument('--suite', nargs='+', default=['dev-ordered', 'dev-occluded'])
   parser.add_argument('--runs', type=int, default=5, help='runs per case')
   args = parser.parse_args()
   runtime.setup()

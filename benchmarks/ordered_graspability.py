@@ -82,12 +82,12 @@ def main():
   args = parser.parse_args()
   runtime.setup()
   base = config_lib.from_arguments(args)
-  files = suite_files(['ordered', 'isolated'])
-  paths = files['ordered']
+  files = suite_files(['dev-ordered', 'isolated'])
+  paths = files['dev-ordered']
   if args.cases:
-    paths = [p for p in paths if p.stem.split('-')[1] in args.cases]
+    paths = [p for p in paths if p.stem.rsplit('-', 1)[1] in args.cases]
     if len(paths) != len(set(args.cases)):
-      parser.error(f'--cases {" ".join(args.cases)}: the ordered suite has cases 00 to 05')
+      parser.error(f'--cases {" ".join(args.cases)}: dev-ordered has cases 00 to 05')
   t0 = time.perf_counter()
   results = [ordered_case(p, base) for p in paths]
   control = [isolated_case(p, base) for p in files['isolated']]

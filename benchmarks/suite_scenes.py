@@ -51,7 +51,7 @@ def bench(suite: str, repeats: int, batch: int) -> dict:
 
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  parser.add_argument('--suite', nargs='+', default=['ordered', 'random'],
+  parser.add_argument('--suite', nargs='+', default=['dev-ordered', 'dev-random'],
                       choices=SUITES)
   parser.add_argument('--repeats', type=int, default=1)
   parser.add_argument('--batch', type=int, default=1)

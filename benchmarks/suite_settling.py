@@ -42,7 +42,7 @@ def settle(files: list[pathlib.Path], keys: int, edge: float) -> list[dict]:
 
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  parser.add_argument('--suite', default='random', help='a suite name or a folder of cases')
+  parser.add_argument('--suite', default='dev-random', help='a suite name or a folder of cases')
   parser.add_argument('--keys', type=int, default=2, help='placement jitters per case')
   parser.add_argument('--edge', type=float, default=0.03, help='m from the border: near it')
   args = parser.parse_args()

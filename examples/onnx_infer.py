@@ -23,8 +23,9 @@ import sys
 import numpy as np
 import onnxruntime as ort
 
-from mvcoba_jax.deploy import DeployError, checks, model_file
+from mvcoba_jax.deploy import DeployError, model_file
 from mvcoba_jax.deploy.heightmaps import filled
+from mvcoba_jax.sim.push import push_length
 
 
 def choose(session: ort.InferenceSession, color: np.ndarray, depth: np.ndarray,
@@ -40,7 +41,7 @@ def choose(session: ort.InferenceSession, color: np.ndarray, depth: np.ndarray,
 def to_world(action: dict, depth: np.ndarray, model: dict) -> dict:
   """Adds angle, the world point (x, y, z) of the action, per model.json 'pixel_to_world', and
   how far a push slides (the length it trained with, cut at the workspace's edge as the simulator
-  cuts it: `checks.push_length`; 0 for a grasp)."""
+  cuts it: `sim.push.push_length`; 0 for a grasp)."""
   hm = model['heightmap']
   res, half = hm['resolution_m'], hm['workspace_half_m']
   row, col = action['row'], action['col']
@@ -50,7 +51,7 @@ def to_world(action: dict, depth: np.ndarray, model: dict) -> dict:
   push = action['primitive'] == model['primitives']['push']
   return {'primitive_name': names[action['primitive']], **action, 'angle_rad': angle, 'x': x,
           'y': y, 'z': float(depth[hm['views_used'], row, col].max()),
-          'push_length_m': float(checks.push_length((x, y), angle, model['config']['env'][
+          'push_length_m': float(push_length((x, y), angle, model['config']['env'][
               'push_length'], half)) if push else 0.0}
 
 

@@ -64,7 +64,7 @@ def without_occluders(text: str) -> str:
 
 
 def write_conditions(out: pathlib.Path, cameras_xy, names=tuple(CONDITIONS),
-                     source=SUITES_DIR / 'occluded') -> dict:
+                     source=SUITES_DIR / 'dev-occluded') -> dict:
   """Condition -> the folder of its case files under `out`, made from `source`'s cases, for
   the conditions `names`."""
   folders = {}

@@ -20,7 +20,7 @@ GROUPS = ((0, 0), (1, 1), (2, 2), (3, 4), (5, None))
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('results', nargs='+')
-  parser.add_argument('--suite', default='random')
+  parser.add_argument('--suite', default='dev-random')
   args = parser.parse_args()
   pushes, lost = [], []
   for path in args.results:

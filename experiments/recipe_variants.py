@@ -98,6 +98,11 @@ VARIANTS = {
     # about one object, mostly neighbours shoved along the heap; a push from CPG's ring (1-2.5 cm
     # off an edge) still moves the object ahead 2.5-4 cm, a finger's gap on a packed row.
     'short_push': COMBINATION + ['--set', 'env.push_length=0.05'],
+    # Issue 80's screen, from today's default preset (6000 actions, pushes cut at the workspace's
+    # edge): the control, and a quarter of its training drops packed arrangements of the training
+    # types (sim/arrangements.py), for packed arrangements unlike the development templates.
+    'cut_default': ['--config', 'default'],
+    'family_packed': ['--config', 'default', '--set', 'env.packed_share=0.25'],
 }
 # variant -> the variant whose finished run it resumes to more actions. The same as training
 # that long in one go: nothing in the recipe reads the total (constant learning rate, exploration

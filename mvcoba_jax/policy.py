@@ -24,6 +24,7 @@ from mvcoba_jax.deploy.calibration import DeployError
 from mvcoba_jax.deploy.heightmaps import filled
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.sim.geometry import rotation_angle
+from mvcoba_jax.sim.push import push_length
 from mvcoba_jax.learner.checkpoint import CheckpointError, Checkpoints, incompatibilities
 
 PARAM_LIMIT = 1e6  # no trained weight comes near this; a larger one is damage, not learning
@@ -47,7 +48,7 @@ class Decision:
   z: float  # the highest surface the method's views see in the cell
   q: float  # the rule's score of the action
   # m a push slides along `angle`: env.push_length cut at the workspace's edge, as the simulator
-  # and the robot cut it (`deploy.checks.push_length`); 0 for a grasp
+  # and the robot cut it (`sim.push.push_length`); 0 for a grasp
   push_length: float
 
 
@@ -97,7 +98,7 @@ class Policy(typing.NamedTuple):
     angle, x, y = float(rotation_angle(k, config.env.num_rotations)), float(world.x[0]), \
         float(world.y[0])
     push = 0.0 if primitive == 'grasp' else float(
-        checks.push_length((x, y), angle, config.env.push_length, half))
+        push_length((x, y), angle, config.env.push_length, half))
     decision = Decision(primitive=primitive, rotation=k, angle=angle, row=int(pick.row[0]),
                         col=int(pick.col[0]), x=x, y=y, z=float(world.z[0]), q=float(score[0]),
                         push_length=push)

@@ -8,11 +8,11 @@ import jax
 import numpy as np
 
 from mvcoba_jax import perception
-from mvcoba_jax.deploy import checks
 from mvcoba_jax.learner.task import Task
 from mvcoba_jax.sim import cameras
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.sim.primitives import GRASP
+from mvcoba_jax.sim.push import push_length
 from mvcoba_jax.sim.scene import MAX_OPENING
 
 # Action markers (BGR): a push, a grasp that lifted an object, a grasp that did not.
@@ -85,7 +85,7 @@ def run_strip(trace, run: int, task: Task, scale: int = 3) -> np.ndarray:
       color = GRASP_OK_COLOR if bool(trace.grasp_success[run, t]) else GRASP_FAILED_COLOR
     else:  # push: from the pixel along (cos, sin), as far as it went (cut at the border)
       start = -border + centre / scale * cell
-      length = float(checks.push_length(start, yaw, env.push_length, border)) / cell * scale
+      length = float(push_length(start, yaw, env.push_length, border)) / cell * scale
       ends = (centre, centre + length * np.array([np.cos(yaw), np.sin(yaw)]))
       color = PUSH_COLOR
     a, b = (tuple(int(round(v)) for v in e) for e in ends)

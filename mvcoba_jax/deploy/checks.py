@@ -88,20 +88,6 @@ def action(q: float, angle: float, position: tuple[float, float, float], half: f
                   f'm, 0 to {top:g} m)')
 
 
-def push_length(start, angle, length, half, xp=np):
-  """How far a push from `start` (x, y) along `angle` (both in the workspace frame) slides, up to
-  `length`, and ends within +-half: cut short at the workspace's edge, as VPG's robot code cuts
-  it, so no push sweeps past the region the cameras were calibrated on. The one push contract:
-  the simulator (`sim.primitives.target`, with `xp=jax.numpy`), `Policy.act` and
-  `OnnxPolicy.act` all cut a push here."""
-  reach = length
-  for at, step in zip(start, (xp.cos(angle), xp.sin(angle))):
-    along = xp.abs(step) > 1e-12
-    border = xp.where(step > 0, half, -half)
-    reach = xp.where(along, xp.minimum(reach, (border - at) / xp.where(along, step, 1.0)), reach)
-  return xp.maximum(reach, 0.0)
-
-
 def _numbers(values, name: str) -> np.ndarray:
   try:
     array = np.asarray(values)

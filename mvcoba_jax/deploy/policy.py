@@ -12,6 +12,7 @@ import numpy as np
 from mvcoba_jax.deploy import checks, model_file
 from mvcoba_jax.deploy.calibration import Calibration, DeployError
 from mvcoba_jax.deploy.heightmaps import changed_views, filled
+from mvcoba_jax.sim.push import push_length
 
 
 @dataclasses.dataclass(frozen=True)
@@ -21,7 +22,7 @@ class Action:
   position: tuple[float, float, float]  # base frame: the cell's centre at its surface height
   angle: float  # base frame: the gripper's yaw and the push direction about +z
   push_length: float  # m a push slides along `angle`: config.env.push_length, cut short at the
-  # workspace's edge (`checks.push_length`); 0 for a grasp
+  # workspace's edge (`sim.push.push_length`); 0 for a grasp
   rotation: int
   row: int
   col: int
@@ -89,7 +90,7 @@ class OnnxPolicy:
     colour out of its range (`checks.observation`; non-finite cells count as unseen), a frame
     where a camera saw none of the workspace, or when the action has a non-finite score or would
     leave the workspace or go below the table (`checks.action`); a push ends at the workspace's
-    edge at the farthest (`checks.push_length`)."""
+    edge at the farthest (`sim.push.push_length`)."""
     self.check(calibration)
     spec = self.spec
     res, half = spec.resolution_m, spec.workspace_half_m
@@ -114,7 +115,7 @@ class OnnxPolicy:
     except checks.Refused as e:
       raise DeployError(f'refused: {e}') from None
     grasp = primitive == spec.grasp
-    push = 0.0 if grasp else float(checks.push_length((x, y), spec.angles_rad[rotation],
+    push = 0.0 if grasp else float(push_length((x, y), spec.angles_rad[rotation],
                                                        spec.push_length_m, half))
     return Action(primitive='grasp' if grasp else 'push',
                   position=tuple(float(v) for v in calibration.workspace_to_base((x, y, z))),

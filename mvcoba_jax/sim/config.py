@@ -205,8 +205,9 @@ class EnvConfig:
   # hiding all (occluder slot 0) or part (slot 1, shifted sideways) of what that camera sees.
   occluded_share: float = 0.0
   # Share of reset(key)'s tabletops laid out packed instead (beyond the paper, whose training
-  # drops are never packed): the objects side by side in rows `PACKED_GAP` apart, each in its
-  # rest pose along the rows or across them, the rows turned by a drawn yaw about a drawn centre.
+  # drops are never packed): one of the scene's packed arrangements of the training types (rows,
+  # grids, L shapes, mixed rows; `tabletop.packed_bank`, `sim/arrangements.py`), with gaps the
+  # fingers cannot enter, turned by a drawn yaw about a drawn centre.
   packed_share: float = 0.0
   num_rotations: int = 16
   settle_steps: int = 375  # physics steps (1.5 s) for placed or dropped objects to come to rest

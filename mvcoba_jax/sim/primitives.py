@@ -12,9 +12,9 @@ import math
 import jax.numpy as jnp
 from flax import struct
 
-from mvcoba_jax.deploy import checks
 from mvcoba_jax.sim.config import EnvConfig
 from mvcoba_jax.sim.geometry import rotation_angle
+from mvcoba_jax.sim.push import push_length
 from mvcoba_jax.sim.scene import MAX_OPENING
 
 PUSH, GRASP = 0, 1
@@ -85,7 +85,7 @@ def start_pose(action: Action, env: EnvConfig):
 
 def target(script: Script, action: Action, env: EnvConfig, half: float, t):
   """Actuator targets at physics step t of the primitive; a push stops at the workspace's edge
-  (+-`half`), as the robot's does (`deploy.checks.push_length`)."""
+  (+-`half`), as the robot's does (`sim.push.push_length`)."""
   start, work = tip_heights(action, env)
   yaw = rotation_angle(action.rotation, env.num_rotations)
   ramp = lambda t0, n: jnp.clip((t - t0 + 1) / n, 0.0, 1.0)
@@ -98,7 +98,7 @@ def target(script: Script, action: Action, env: EnvConfig, half: float, t):
   grasp_finger = FINGER_OPEN + (FINGER_SQUEEZE - FINGER_OPEN) * ramp(script.descend, script.close)
 
   # Push: descend closed, slide along the rotation's direction.
-  reach = checks.push_length((action.x, action.y), yaw, env.push_length, half, xp=jnp)
+  reach = push_length((action.x, action.y), yaw, env.push_length, half, xp=jnp)
   along = jnp.minimum(ramp(script.descend, script.push) * env.push_length, reach)
   push_x = action.x + along * jnp.cos(yaw)
   push_y = action.y + along * jnp.sin(yaw)

@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from mvcoba_jax.sim import cameras, occluders, physics, primitives, shapes
+from mvcoba_jax.sim import arrangements, cameras, occluders, physics, primitives, shapes
 from mvcoba_jax.sim.config import TabletopConfig
 from mvcoba_jax.sim.geometry import quat_mul, yaw_quat
 from mvcoba_jax.sim.physics import SimState
@@ -21,8 +21,40 @@ from mvcoba_jax.sim.scene import GRIPPER_PARK, Scene, build_scene
 
 PLACEMENT_TRIES = 16  # candidate spots per object and drop layer
 PLACEMENT_GAP = 0.004  # clearance between footprint circles of objects dropped in one layer
-PACKED_GAP = 0.001  # between the footprints of packed objects, as in the ordered suite
-PACKED_ROW = (0.10, 0.20)  # length of a packed layout's rows, drawn (m)
+PACKED_BANK = 256  # packed arrangements a scene's `env.packed_share` drops draw from
+PACKED_SEED = 90_000  # their draws: apart from validation's and the sealed suites' (generate.py)
+
+
+def packed_bank(slot_shapes: tuple[str, ...], limit: int, size: int = PACKED_BANK,
+                seed: int = PACKED_SEED) -> dict[str, jnp.ndarray]:
+  """`size` packed arrangements of the training types (`arrangements.TRAINING`, in turn) on the
+  scene's object slots, centred: in_play (N, M), xy (N, M, 2), yaw (N, M) rad, radius (N,) of
+  the circle that holds each. A part takes a free slot of its shape, else one of a shape whose
+  footprint fits inside its own (a tall box or a cylinder where a cube stood), else is left out;
+  at most `limit` parts. Built once per scene, in NumPy; drops pick among them in JAX."""
+  m = len(slot_shapes)
+  in_play, xy = np.zeros((size, m), bool), np.zeros((size, m, 2), np.float32)
+  yaw, radius = np.zeros((size, m), np.float32), np.zeros(size, np.float32)
+  kinds = arrangements.TRAINING
+  for n in range(size):
+    parts = arrangements.TYPES[kinds[n % len(kinds)]](np.random.default_rng(seed + n))
+    taken = []
+    for name, x, y, part_yaw, _ in parts:
+      room = arrangements.footprint(name, part_yaw)
+      fits = [s for s in range(m) if not in_play[n, s] and (slot_shapes[s] == name or np.all(
+          arrangements.footprint(slot_shapes[s], part_yaw) <= room + 1e-9))]
+      if not fits or len(taken) == limit:
+        continue
+      slot = min(fits, key=lambda s: slot_shapes[s] != name)  # its own shape first
+      in_play[n, slot] = True
+      taken.append((slot_shapes[slot], x, y, part_yaw, 0.0, slot))
+    if not taken:
+      raise ValueError(f'scene.pool: no object slot fits a part of packed arrangement {n}')
+    centred, radius[n] = arrangements.centred([t[:5] for t in taken])
+    for (_, x, y, part_yaw, _), (*_, slot) in zip(centred, taken):
+      xy[n, slot], yaw[n, slot] = (x, y), np.radians(part_yaw)
+  return {k: jnp.asarray(v) for k, v in
+          (('in_play', in_play), ('xy', xy), ('yaw', yaw), ('radius', radius))}
 
 
 @struct.dataclass
@@ -114,7 +146,8 @@ class Tabletop:
                                jnp.float32)
     self._bounding_radius = jnp.asarray([0.5 * np.linalg.norm(s.rest_extent)
                                          for s in slot_shapes], jnp.float32)
-    self._footprint = jnp.asarray([s.rest_extent[:2] for s in slot_shapes], jnp.float32)
+    if config.env.packed_share > 0:
+      self._bank = packed_bank(idx.slot_shapes, config.env.num_objects)
 
   # ----------------------------------------------------------------------------- physics core
   def _place_gripper(self, sim: SimState, pose) -> SimState:
@@ -190,7 +223,8 @@ class Tabletop:
     if env.packed_share > 0:
       k_packed, k_share = jax.random.split(jax.random.fold_in(key, 2))
       packed = jax.random.uniform(k_share) < env.packed_share
-      packed_pos, packed_quat = self._packed(k_packed, order, in_play)
+      packed_in_play, packed_pos, packed_quat = self._packed(k_packed)
+      in_play = jnp.where(packed, packed_in_play, in_play)
       pos = jnp.where(packed, packed_pos, pos)
       quat = jnp.where(packed, packed_quat, quat)
     color = jnp.asarray(shapes.COLORS)[jax.random.permutation(k_color, jnp.arange(m) % 10)]
@@ -198,43 +232,25 @@ class Tabletop:
     return Layout(in_play=in_play, pos=pos, quat=quat, color=color,
                   occluder_pos=occluder_pos, occluder_quat=occluder_quat)
 
-  def _packed(self, key, order, in_play):
-    """Poses of `env.packed_share`'s layouts: the objects in play, in `order`, side by side in
-    rows `PACKED_GAP` apart, each along the rows or turned across them (drawn), a row full when
-    the next would pass its drawn length (`PACKED_ROW`); the rows turned by a drawn yaw about a
-    drawn centre that keeps the layout inside the workspace less `env.drop_margin`."""
-    m = self.num_slots
-    k_row, k_across, k_yaw, k_centre = jax.random.split(key, 4)
-    row = jax.random.uniform(k_row, (), minval=PACKED_ROW[0], maxval=PACKED_ROW[1])
-    across = jax.random.bernoulli(k_across, shape=(m,))
-    size = jnp.where(across[:, None], self._footprint[:, ::-1], self._footprint)
-
-    def place(i, carry):
-      xy, cursor, row_y, row_depth = carry
-      s = order[i]
-      length, depth = size[s, 0], size[s, 1]
-      wrap = (cursor > 0) & (cursor + length > row)
-      row_y = jnp.where(wrap, row_y + row_depth + PACKED_GAP, row_y)
-      cursor, row_depth = jnp.where(wrap, 0.0, cursor), jnp.where(wrap, 0.0, row_depth)
-      xy = xy.at[s].set(jnp.stack([cursor + 0.5 * length, row_y + 0.5 * depth]))
-      return xy, cursor + length + PACKED_GAP, row_y, jnp.maximum(row_depth, depth)
-
-    n = self.config.env.num_objects
-    xy, _, _, _ = jax.lax.fori_loop(0, n, place, (jnp.zeros((m, 2)), 0.0, 0.0, 0.0))
-    low = jnp.min(jnp.where(in_play[:, None], xy - 0.5 * size, jnp.inf), axis=0)
-    high = jnp.max(jnp.where(in_play[:, None], xy + 0.5 * size, -jnp.inf), axis=0)
+  def _packed(self, key):
+    """(in_play, pos, quat) of an `env.packed_share` drop: one arrangement of `packed_bank`,
+    turned by a drawn yaw about a drawn centre that keeps it inside the workspace less
+    `env.drop_margin`."""
+    bank = self._bank
+    k_pick, k_yaw, k_centre = jax.random.split(key, 3)
+    pick = jax.random.randint(k_pick, (), 0, bank['in_play'].shape[0])
+    in_play, xy, part_yaw = bank['in_play'][pick], bank['xy'][pick], bank['yaw'][pick]
     yaw = jax.random.uniform(k_yaw, (), maxval=2 * jnp.pi)
     c, s = jnp.cos(yaw), jnp.sin(yaw)
-    local = xy - 0.5 * (low + high)
-    turned = jnp.stack([c * local[:, 0] - s * local[:, 1], s * local[:, 0] + c * local[:, 1]], 1)
+    turned = jnp.stack([c * xy[:, 0] - s * xy[:, 1], s * xy[:, 0] + c * xy[:, 1]], 1)
     room = jnp.maximum(self.config.scene.workspace_half - self.config.env.drop_margin
-                       - 0.5 * jnp.linalg.norm(high - low), 0.0)
+                       - bank['radius'][pick], 0.0)
     centre = jax.random.uniform(k_centre, (2,), minval=-room, maxval=room)
     z = self._rest_half_height + 0.002
     pos = jnp.where(in_play[:, None], jnp.concatenate([turned + centre, z[:, None]], 1),
                     self._park_qpos[:, :3])
-    quat = quat_mul(yaw_quat(yaw + jnp.where(across, 0.5 * jnp.pi, 0.0)), self._rest_quat)
-    return pos, quat
+    quat = quat_mul(yaw_quat(yaw + part_yaw), self._rest_quat)
+    return in_play, pos, quat
 
   def drawn_occluders(self, key):
     """Occluder poses of a random drop: with probability `env.occluded_share`, one occluder

@@ -1,7 +1,12 @@
-"""The shipped test suites (package data) and how a suite name becomes its case files.
+"""The shipped suites (package data) and how a suite name becomes its case files.
 
-`random`, `ordered`, `occluded` and `isolated` are ours (`.scn`, written by `generate.py`); `vpg`
-is VPG's eleven hard cases in VPG's text format, copied under its BSD license (`vpg/`).
+The sealed test suites (`SEALED`: heaps, packed arrangements of the types training draws and of
+three types it never draws, held-out occluders) and `isolated` are ours (`.scn`, written by
+`generate.py` from seeds nothing else used; `manifest.json` records them); `vpg` is VPG's eleven
+hard cases in VPG's text format, copied under its BSD license (`vpg/`). The development suites
+(`DEVELOPMENT`) are the test suites of every result before the sealed ones: they chose recipes,
+so they serve choosing now, as validation does. A sealed suite is run once per claim, every method
+of the comparison at once, and no figure from it feeds a choice (docs/results/sealed.md).
 """
 from __future__ import annotations
 
@@ -10,14 +15,16 @@ import pathlib
 from mvcoba_jax.sim.scenarios import ScenarioError
 
 SUITES_DIR = pathlib.Path(__file__).resolve().parent
-SUITES = ('random', 'ordered', 'occluded', 'isolated', 'vpg')
+SEALED = ('random', 'ordered', 'packed-ring', 'packed-t_shape', 'packed-stack', 'occluded')
+DEVELOPMENT = ('dev-random', 'dev-ordered', 'dev-occluded')
+SUITES = SEALED + ('isolated', 'vpg') + DEVELOPMENT  # every shipped suite
 
 
 def suite_files(names: list[str]) -> dict[str, list[pathlib.Path]]:
-  """Suite name -> its case files; `all` is every shipped suite; a PATH (a case file, or a folder
-  of .scn and .txt files) is a suite of its own."""
+  """Suite name -> its case files; `all` is every sealed suite, `isolated` and `vpg`; a PATH (a
+  case file, or a folder of .scn and .txt files) is a suite of its own."""
   if 'all' in names:
-    names = [n for n in names if n != 'all'] + list(SUITES)
+    names = [n for n in names if n != 'all'] + list(SEALED) + ['isolated', 'vpg']
   out = {}
   for name in dict.fromkeys(names):
     if name in SUITES:

@@ -1,36 +1,53 @@
-"""Writes the shipped test suites (our .scn format); run it again to regenerate them exactly.
+"""Writes the shipped suites (our .scn format); run it again to regenerate them exactly.
 
   python -m mvcoba_jax.suites.generate
 
-- random/: 6 cases of 20-40 objects heaped over the workspace, each set down onto the heap
-  centred over an object beneath it; objects that leave the table as the case settles (under
-  jitters drawn apart from mvcoba-eval's) are redrawn, and the file names the draws passed over;
-- ordered/: 6 well-ordered cases of 4-17 blocks packed with no room for the fingers between them
-  (pinwheels, a framed square, grids);
-- occluded/: 12 cases: camera 1 fully blocked; both cameras partly blocked so that some objects
-  are seen by one camera only; then 9 cases of objects set apart under occluders drawn from
-  `sim/occluders.py`'s test region (whole, a pair of partial ones, or one of each), which
-  training never comes within 3 cm and 15 degrees of;
+The sealed test suites, drawn from generator seeds no other suite or study used (`SEALED_SEED`),
+each run once per claim, every method of the comparison at once (docs/results/sealed.md):
+- random/: 6 heaps of 20-40 objects, as dev-random's (below), from other seeds;
+- ordered/: 8 packed arrangements of the types training draws (`arrangements.TRAINING`: rows,
+  grids, L shapes, mixed rows), 2 of each, from other seeds;
+- packed-ring/, packed-t_shape/, packed-stack/: 4 packed arrangements each of a type no training
+  or validation draw holds (`arrangements.HELD_OUT`);
+- occluded/: 12 cases of objects set apart under occluders drawn from `sim/occluders.py`'s test
+  region (whole, a pair of partial ones, or one of each), every object seen by a camera;
 - isolated/: 16 cases of one object alone (each shape twice, random place and yaw): a policy's
   precision with nothing around to hold the object in place.
+`manifest.json` beside them records each sealed suite's seeds, the generator's commit and every
+file's SHA-256 (tests/unit/test_sealed_suites.py holds the files to it).
+
+The development suites, the test suites of every result before the sealed ones, which chose
+recipes and shaped the 5 cm push; now for choosing, like validation:
+- dev-random/: 6 cases of 20-40 objects heaped over the workspace, each set down onto the heap
+  centred over an object beneath it; objects that leave the table as the case settles (under
+  jitters drawn apart from mvcoba-eval's) are redrawn, and the file names the draws passed over;
+- dev-ordered/: 6 well-ordered cases of 4-17 blocks packed with no room for the fingers between
+  them (pinwheels, a framed square, grids);
+- dev-occluded/: 12 cases: camera 1 fully blocked; both cameras partly blocked so that some
+  objects are seen by one camera only; then 9 cases of objects set apart under occluders drawn
+  from the test region, which training never comes within 3 cm and 15 degrees of.
 Every case also holds one isolated object as a readiness check, as VPG and the paper do.
 
   python -m mvcoba_jax.suites.generate --validation DIR [--cases 6]
 
 writes validation suites drawn apart from the shipped suites (val-random: heaps from other seeds;
 val-ordered: packed templates no shipped case holds, a brick bond, a hexagonal packing, staggered
-tall boxes; val-occluded: occluders from `sim/occluders.py`'s validation region, which neither
-training nor the tests use; val-occluded-high: from its high validation region, which hides as
-much as the test's; val-heaps: twice the cases of heaps of the test's sizes, 20-40 objects, where
-val-random's 18 runs a seed were too few to rank what loses objects) for choosing training
-settings, never the shipped suites results are reported on. tests/unit/test_validation_cases.py
-checks that they share no layout (`suites/similarity.py`) and no occluder pose with the shipped
-suites.
+tall boxes; val-packed: the training arrangement types from other seeds; val-occluded: occluders
+from `sim/occluders.py`'s validation region, which neither training nor the tests use;
+val-occluded-high: from its high validation region, which hides as much as the test's;
+val-heaps: twice the cases of heaps of the test's sizes, 20-40 objects, where val-random's 18 runs
+a seed were too few to rank what loses objects) for choosing training settings, never the sealed
+suites results are reported on. tests/unit/test_validation_cases.py checks that they share no
+layout (`suites/similarity.py`) and no occluder pose with the shipped suites.
 """
 from __future__ import annotations
 
 import argparse
+import functools
+import hashlib
+import json
 import pathlib
+import subprocess
 import tempfile
 
 import jax
@@ -38,10 +55,11 @@ import numpy as np
 
 from mvcoba_jax import runtime
 from mvcoba_jax.config import resolve
-from mvcoba_jax.sim import occluders, shapes
+from mvcoba_jax.sim import arrangements, occluders, shapes
 from mvcoba_jax.sim.scenarios import COLOR_NAMES, case_slots, read_case
-from mvcoba_jax.suites import SUITES_DIR
+from mvcoba_jax.suites import DEVELOPMENT, SEALED, SUITES_DIR
 from mvcoba_jax.suites import cases as suite_cases
+from mvcoba_jax.suites.similarity import largest_rigid_match
 from mvcoba_jax.suites.visibility import visibility
 
 HEADER = '# shape colour x y yaw_deg [z]  (generated by python -m mvcoba_jax.suites.generate)\n'
@@ -360,11 +378,15 @@ def drawn_occluded_case(region: occluders.Region, seed: int, index: int,
 
 
 def passing(draw, tries: int = 20, seen_by_one: bool = False) -> str:
-  """The first case `draw(try)` gives that passes mvcoba-eval's load check and, with
+  """The first case `draw(try)` gives (a draw that raises RuntimeError gives none: a heap whose
+  objects leave, a layout already chosen on) that passes mvcoba-eval's load check and, with
   `seen_by_one`, in which every object is seen by at least one camera once settled."""
   config = resolve('default')
   for attempt in range(tries):
-    text = draw(attempt)
+    try:
+      text = draw(attempt)
+    except RuntimeError:
+      continue
     with tempfile.TemporaryDirectory() as folder:
       path = pathlib.Path(folder) / 'case.scn'
       path.write_text(text)
@@ -376,48 +398,170 @@ def passing(draw, tries: int = 20, seen_by_one: bool = False) -> str:
   raise RuntimeError(f'no case of {tries} draws passes the load check')
 
 
-def validation_suites(cases: int = 6) -> dict[str, list[str]]:
+def family_case(kind: str, seed: int) -> str:
+  """A case of one packed arrangement of type `kind` (`arrangements.TYPES`) drawn from `seed` and
+  placed in the workspace, with one isolated object in the corner farthest from it."""
+  rng = np.random.default_rng(seed)
+  parts = arrangements.placed(arrangements.TYPES[kind](rng), rng, PILE_HALF + 0.05)
+  xy = np.array([(x, y) for _, x, y, _, _ in parts])
+  corners = [np.array(c) * 0.17 for c in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
+  corner = max(corners, key=lambda c: np.hypot(*(xy - c).T).min())
+  isolated = ISOLATED[rng.integers(len(ISOLATED))]
+  start = int(rng.integers(10))
+  text = HEADER + ''.join(
+      line(name, COLOR_NAMES[(start + i) % 10], x, y, yaw,
+           dz + half_height(name) + 0.001 if dz else None)
+      for i, (name, x, y, yaw, dz) in enumerate(parts))
+  return text + line(isolated, 'red', *corner, rng.uniform(0, 180))
+
+
+VALIDATION_DIR = pathlib.Path(__file__).resolve().parents[2] / 'docs' / 'results' / 'validation'
+
+
+@functools.cache
+def chosen_on() -> tuple:
+  """Every case a recipe could have been chosen on: the development and validation suites."""
+  folders = [SUITES_DIR / s for s in DEVELOPMENT] + sorted(VALIDATION_DIR.iterdir())
+  return tuple(read_case(f) for folder in folders for f in sorted(folder.glob('*.scn')))
+
+
+SAME_POSE = (0.01, 5.0)  # m, degrees: occluders nearer in both stand where another stood
+
+
+def unlike_chosen_on(text: str) -> str:
+  """`text`, unless one rigid motion of the table puts half its objects, and four or more, on
+  same-shape objects of a development or validation case (`similarity.largest_rigid_match`), or
+  one of its occluders stands within `SAME_POSE` of one of theirs: then RuntimeError, and
+  `passing` draws again."""
+  with tempfile.TemporaryDirectory() as folder:
+    path = pathlib.Path(folder) / 'case.scn'
+    path.write_text(text)
+    case = read_case(path)
+  if any(largest_rigid_match(case, other) >= max(4, len(case.objects) / 2)
+         for other in chosen_on()):
+    raise RuntimeError('a development or validation layout moved')
+  if case.occluders:
+    poses = lambda cases: [(*o.pos, o.yaw) for c in cases for o in c.occluders]
+    distance, turn = occluders.separation(poses([case]), poses(chosen_on()))
+    if ((distance <= SAME_POSE[0]) & (turn <= SAME_POSE[1])).any():
+      raise RuntimeError('an occluder where a development or validation one stood')
+  return text
+
+
+SEALED_SEED = 50_000  # the sealed suites' draws: no other suite, study or training uses these
+SEALED_PACKED = 2  # sealed `ordered` cases per training arrangement type
+HELD_OUT_CASES = 4  # cases of each held-out arrangement type
+SEALED_OCCLUDED = 12
+# One occluder whole before camera 1 and one part before camera 0 hides an object in most draws:
+# the first of 100 draws in which every object is seen.
+SEALED_TRIES = 100
+
+
+def sealed_suites(only=None) -> dict[str, list[str]]:
+  """The sealed test suites (those named in `only`, if given): suite name -> the text of each of
+  its case files."""
+  return _drawn({
+      'random': lambda: [passing(lambda tries, n=n, i=i: heap_on_table(
+          n, SEALED_SEED + 100 * tries + i)) for i, n in enumerate((20, 24, 28, 32, 36, 40))],
+      'ordered': lambda: [passing(lambda tries, kind=kind, i=i: unlike_chosen_on(family_case(
+          kind, SEALED_SEED + 1000 + 100 * tries + i)))
+                          for i, kind in enumerate(arrangements.TRAINING * SEALED_PACKED)],
+      **{f'packed-{kind}': lambda k=k, kind=kind: [passing(lambda tries, i=i: unlike_chosen_on(
+          family_case(kind, SEALED_SEED + 3000 + 1000 * k + 100 * tries + i)))
+          for i in range(HELD_OUT_CASES)]
+         for k, kind in enumerate(arrangements.HELD_OUT)},
+      'occluded': lambda: [passing(lambda tries, i=i: unlike_chosen_on(drawn_occluded_case(
+          occluders.TEST, SEALED_SEED + 7000 + 100 * tries + i, i)), tries=SEALED_TRIES,
+                                       seen_by_one=True) for i in range(SEALED_OCCLUDED)],
+      'isolated': isolated_cases,
+  }, only)
+
+
+SEALED_DRAWS = {  # how each sealed suite's case i is drawn: the first of its tries that passes
+    'random': f'heap_on_table(n, {SEALED_SEED} + 100 * try + i), n = 20, 24, ..., 40',
+    'ordered': f'family_case(arrangements.TRAINING[i % 4], {SEALED_SEED + 1000} + 100 * try + i)',
+    **{f'packed-{kind}': f'family_case({kind!r}, {SEALED_SEED + 3000 + 1000 * k} + 100 * try + i)'
+       for k, kind in enumerate(arrangements.HELD_OUT)},
+    'occluded': f'drawn_occluded_case(occluders.TEST, {SEALED_SEED + 7000} + 100 * try + i, i)',
+}
+
+
+def manifest(commit: str) -> dict:
+  """The sealed suites' record: how each was drawn, the generator's commit, every file's
+  SHA-256 (tests/unit/test_sealed_suites.py holds the files to it)."""
+  suites = {}
+  for name in SEALED:
+    files = sorted((SUITES_DIR / name).glob('*.scn'))
+    suites[name] = {'draws': SEALED_DRAWS[name],
+                    'sha256': {f.name: hashlib.sha256(f.read_bytes()).hexdigest() for f in files}}
+  return {'generator': 'python -m mvcoba_jax.suites.generate', 'commit': commit,
+          'rule': 'a recipe is chosen on validation and development suites only; a sealed suite '
+                  'is run once per claim, every method of the comparison at once, and no figure '
+                  'from it feeds a choice (docs/results/sealed.md)',
+          'suites': suites}
+
+
+def development_suites(only=None) -> dict[str, list[str]]:
+  """The development suites (the test suites of every result before the sealed ones; those
+  named in `only`, if given): suite name -> the text of each of its case files."""
+  return _drawn({
+      'dev-random': lambda: [heap_on_table(n, seed)
+                             for seed, n in enumerate((20, 24, 28, 32, 36, 40))],
+      'dev-ordered': ordered_cases,
+      'dev-occluded': occluded_cases,
+  }, only)
+
+
+def _drawn(draws: dict, only) -> dict[str, list[str]]:
+  return {name: draw() for name, draw in draws.items() if only is None or name in only}
+
+
+def validation_suites(cases: int = 6, only=None) -> dict[str, list[str]]:
   """Cases of each kind drawn apart from the shipped suites, to choose training settings on
   without tuning to the suites the results are reported on."""
-  return {
-      'val-random': [passing(lambda tries, n=n, seed=seed: heap_on_table(
+  return _drawn({
+      'val-random': lambda: [passing(lambda tries, n=n, seed=seed: heap_on_table(
                          n, VALIDATION_SEED + seed + 100 * tries))
                      for seed, n in enumerate(np.linspace(16, 36, cases).round().astype(int))],
-      'val-ordered': [packed_case(seed) for seed in range(cases)],
-      'val-occluded': [passing(lambda tries, i=i: drawn_occluded_case(
+      'val-ordered': lambda: [packed_case(seed) for seed in range(cases)],
+      'val-packed': lambda: [passing(lambda tries, kind=kind, i=i: family_case(
+          kind, VALIDATION_SEED + 900 + 100 * tries + i))
+                     for i, kind in enumerate(arrangements.TRAINING * 2)],
+      'val-occluded': lambda: [passing(lambda tries, i=i: drawn_occluded_case(
           occluders.VALIDATION, VALIDATION_SEED + 500 + 100 * tries + i, i), seen_by_one=True)
                        for i in range(cases)],
-      'val-occluded-high': [passing(lambda tries, i=i: drawn_occluded_case(
+      'val-occluded-high': lambda: [passing(lambda tries, i=i: drawn_occluded_case(
           occluders.VALIDATION_HIGH, VALIDATION_HIGH_SEED + 100 * tries + i, i, HIGH_KINDS),
                                     seen_by_one=True) for i in range(cases)],
-      'val-heaps': [passing(lambda tries, n=n, i=i: heap_on_table(
+      'val-heaps': lambda: [passing(lambda tries, n=n, i=i: heap_on_table(
                         n, VALIDATION_HEAPS_SEED + 100 * tries + i))
                     for i, n in enumerate(np.linspace(20, 40, 2 * cases).round().astype(int))],
-  }
-
-
-def suites() -> dict[str, list[str]]:
-  """Suite name -> the text of each of its case files."""
-  return {
-      'random': [heap_on_table(n, seed) for seed, n in enumerate((20, 24, 28, 32, 36, 40))],
-      'ordered': ordered_cases(),
-      'occluded': occluded_cases(),
-      'isolated': isolated_cases(),
-  }
+  }, only)
 
 
 def main(argv=None):
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--validation', metavar='DIR',
-                      help='write the validation suites (val-random, val-ordered, val-occluded, '
-                           'val-occluded-high) under DIR instead of the shipped suites')
+                      help='write the validation suites (val-random, val-ordered, val-packed, '
+                           'val-occluded, val-occluded-high, val-heaps) under DIR instead of the '
+                           'shipped suites')
+  parser.add_argument('--only', nargs='+', metavar='SUITE',
+                      help='write these suites alone (names of the sealed, development or '
+                           'validation suites)')
   parser.add_argument('--cases', type=int, default=6, help='validation cases per suite')
+  parser.add_argument('--manifest', action='store_true',
+                      help='write the sealed suites\' manifest.json from the files as they are')
   args = parser.parse_args(argv)
   runtime.setup()
+  if args.manifest:
+    commit = subprocess.run(['git', 'rev-parse', 'HEAD'], capture_output=True, text=True,
+                            cwd=SUITES_DIR).stdout.strip()
+    (SUITES_DIR / 'manifest.json').write_text(json.dumps(manifest(commit), indent=1) + '\n')
+    return
   if args.validation:
-    written, root = validation_suites(args.cases), pathlib.Path(args.validation)
+    written, root = validation_suites(args.cases, args.only), pathlib.Path(args.validation)
   else:
-    written, root = suites(), SUITES_DIR
+    written, root = {**sealed_suites(args.only), **development_suites(args.only)}, SUITES_DIR
   for suite, cases in written.items():
     folder = root / suite
     folder.mkdir(parents=True, exist_ok=True)

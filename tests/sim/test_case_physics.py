@@ -57,10 +57,10 @@ def test_case_settles_in_place_without_interpenetration(settled, case_index):
 
 
 def test_pinwheel_forces_a_push():
-  """ordered-00: four flat boxes turned about a disk. A grasp at any block's centre, at any of
+  """dev-ordered-00: four flat boxes turned about a disk. A grasp at any block's centre, at any of
   the half turn's 8 rotations, lifts nothing: the fingers land on a neighbour and stop there
   (scene.press_force). The case's isolated cylinder, the control, is lifted."""
-  case = read_case(SUITES_DIR / 'ordered' / 'ordered-00.scn')
+  case = read_case(SUITES_DIR / 'dev-ordered' / 'dev-ordered-00.scn')
   config = suite_cases.suite_config(resolve('default'), suite_cases.pool_for([case]))
   env = Tabletop(config.tabletop)
   rotations = env.config.env.num_rotations // 2

@@ -185,7 +185,7 @@ def test_load_check_holds_objects_on_the_table_not_those_set_on_the_heap():
   """In a heap, objects the file sets down on others slide centimetres onto it as it settles;
   those it puts on the table move millimetres. With a 1 mm bound the check names only the
   latter (each 'listed on the table'); with its 1 cm bound, none."""
-  case = read_case(SUITES_DIR / 'random' / 'random-05.scn')
+  case = read_case(SUITES_DIR / 'dev-random' / 'dev-random-05.scn')
   config = resolve('default')
   strict = suite_cases.case_problems([case], config, settle_move=0.001)
   on_table = {o.line for o in case.objects if len(_fields(case, o.line)) == 5}

@@ -412,14 +412,14 @@ def test_every_shipped_policy_evaluates(tmp_path):
   """What docs/usage.md runs on pretrained/*/: each shipped policy loads without a warning and
   acts in a case (one run, a few actions, every policy in one call)."""
   folders = sorted(str(p) for p in (ROOT / 'pretrained').iterdir() if p.is_dir())
-  case = ROOT / 'mvcoba_jax' / 'suites' / 'ordered' / 'ordered-00.scn'
+  case = ROOT / 'mvcoba_jax' / 'suites' / 'dev-ordered' / 'dev-ordered-00.scn'
   with warnings.catch_warnings():
     warnings.simplefilter('error', UserWarning)
     report = mvcoba_jax.evaluate(folders, [str(case)], runs=1, max_actions=3, out=tmp_path,
                                  progress=False)
   rows = next(iter(report.values()))
   assert len(rows) == len(folders)
-  assert all(sum(r['actions'] for r in row['runs']['ordered-00']) > 0 for row in rows.values())
+  assert all(sum(r['actions'] for r in row['runs']['dev-ordered-00']) > 0 for row in rows.values())
 
 
 def test_shipped_example_state_is_an_input_of_the_shipped_policy():

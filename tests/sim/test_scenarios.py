@@ -13,7 +13,7 @@ import pytest
 from mvcoba_jax.config import resolve
 from mvcoba_jax.suites.cases import case_problems, pool_for, settled_starts, suite_config
 from mvcoba_jax.suites.visibility import visibility
-from mvcoba_jax.sim import occluders, shapes
+from mvcoba_jax.sim import arrangements, occluders, shapes
 from mvcoba_jax.sim.geometry import quat_mul, yaw_quat
 from mvcoba_jax.sim.scenarios import (
   Case,
@@ -27,7 +27,7 @@ from mvcoba_jax.sim.scenarios import (
 )
 from mvcoba_jax.sim.scene import GRIPPER_PARK, park_position
 from mvcoba_jax.sim.tabletop import Tabletop
-from mvcoba_jax.suites import SUITES_DIR, generate, suite_files
+from mvcoba_jax.suites import SUITES, SUITES_DIR, generate, suite_files
 from tests.penetration import max_penetration
 
 VPG_CASES = SUITES_DIR / 'vpg'
@@ -242,38 +242,58 @@ def test_public_vpg_cases_do_not_interpenetrate(public_cases):
 
 
 # ------------------------------------------------------------------------------ shipped suites
-SHIPPED = {'random': (6, 20, 40), 'ordered': (6, 4, 17), 'occluded': (12, 3, 6)}
+# suite -> (cases, fewest objects, most objects), the isolated one left out
+SHIPPED = {'dev-random': (6, 20, 40), 'dev-ordered': (6, 4, 17), 'dev-occluded': (12, 3, 6),
+           'random': (6, 20, 40), 'ordered': (8, 3, 16), 'packed-ring': (4, 3, 16),
+           'packed-t_shape': (4, 3, 16), 'packed-stack': (4, 3, 16), 'occluded': (12, 3, 7)}
 
 
-def random_texts():
-  """The random cases as `generate.random_case` writes them from the draws each file says were
-  passed over: the placement is NumPy alone, so this does not depend on the physics that chose
-  the draws (that the heaps stay on the table is tested below, on the physics)."""
+def heap_texts(suite: str, seeds) -> list[str]:
+  """The heaps as `generate.random_case` writes them from the draws each file says were passed
+  over, case i from one of `seeds(i)`: the placement is NumPy alone, so this does not depend on
+  the physics that chose the draws (that the heaps stay on the table is tested below)."""
   texts = []
-  for seed, path in enumerate(sorted((SUITES_DIR / 'random').glob('*.scn'))):
+  for i, path in enumerate(sorted((SUITES_DIR / suite).glob('*.scn'))):
     lines = path.read_text().splitlines()
-    skip = [int(d) for line in lines if line.startswith('# draws passed over:')
-            for d in line.split(':')[1].split()]
+    skip = frozenset(int(d) for line in lines if line.startswith('# draws passed over:')
+                     for d in line.split(':')[1].split())
     objects = sum(1 for line in lines if not line.startswith('#')) - 1  # the isolated one
-    texts.append(generate.random_case(objects, seed, frozenset(skip))[0])
+    draws = [generate.random_case(objects, seed, skip)[0] for seed in seeds(i)]
+    texts.append(path.read_text() if path.read_text() in draws else draws[0])
+  return texts
+
+
+def drawn_texts(suite: str, draw, first: int = 0, tries: int = 20) -> list[str]:
+  """Case files `first` on of a suite as the generator writes them, case i the draw
+  `draw(try, i)` its file holds among the first `tries` (which draws pass is physics: tested
+  below, on the physics)."""
+  texts = []
+  for i, path in enumerate(sorted((SUITES_DIR / suite).glob('*.scn'))[first:]):
+    draws = [draw(t, i) for t in range(tries)]
+    texts.append(path.read_text() if path.read_text() in draws else draws[0])
   return texts
 
 
 @pytest.fixture(scope='module')
 def generated():
-  return {'random': random_texts(), 'ordered': generate.ordered_cases(),
-          'occluded': generate.set_occluded_cases() + drawn_occluded_texts()}
-
-
-def drawn_occluded_texts():
-  """The occluded suite's drawn cases as the generator writes them, each the draw its file
-  holds among the first 20 (which draws pass is physics: tested below, on the physics)."""
-  texts = []
-  for i, path in enumerate(sorted((SUITES_DIR / 'occluded').glob('*.scn'))[3:]):
-    draws = [generate.drawn_occluded_case(occluders.TEST, generate.OCCLUDED_SEED + 100 * t + i, i)
-             for t in range(20)]
-    texts.append(path.read_text() if path.read_text() in draws else draws[0])
-  return texts
+  sealed = generate.SEALED_SEED
+  training = arrangements.TRAINING
+  return {
+      'dev-random': heap_texts('dev-random', lambda i: [i]),
+      'dev-ordered': generate.ordered_cases(),
+      'dev-occluded': generate.set_occluded_cases() + drawn_texts(
+          'dev-occluded', lambda t, i: generate.drawn_occluded_case(
+              occluders.TEST, generate.OCCLUDED_SEED + 100 * t + i, i), first=3),
+      'random': heap_texts('random', lambda i: [sealed + 100 * t + i for t in range(20)]),
+      'ordered': drawn_texts('ordered', lambda t, i: generate.family_case(
+          training[i % len(training)], sealed + 1000 + 100 * t + i)),
+      **{f'packed-{kind}': drawn_texts(f'packed-{kind}', lambda t, i, k=k, kind=kind:
+                                       generate.family_case(kind, sealed + 3000 + 1000 * k
+                                                            + 100 * t + i))
+         for k, kind in enumerate(arrangements.HELD_OUT)},
+      'occluded': drawn_texts('occluded', lambda t, i: generate.drawn_occluded_case(
+          occluders.TEST, sealed + 7000 + 100 * t + i, i), tries=generate.SEALED_TRIES),
+  }
 
 
 @pytest.mark.parametrize('suite', sorted(SHIPPED))
@@ -293,10 +313,11 @@ def test_shipped_suites_are_generated_and_start_apart(suite, generated):
     assert deepest < 0.002, (case.name, deepest)
 
 
-def test_random_heaps_stay_on_the_table():
-  """Every object of every random case stays in the workspace while the case settles as
-  mvcoba-eval starts its runs (its jitters, two runs)."""
-  cases = [read_case(f) for f in sorted((SUITES_DIR / 'random').glob('*.scn'))]
+@pytest.mark.parametrize('suite', ['random', 'dev-random'])
+def test_random_heaps_stay_on_the_table(suite):
+  """Every object of every heap stays in the workspace while the case settles as mvcoba-eval
+  starts its runs (its jitters, two runs)."""
+  cases = [read_case(f) for f in sorted((SUITES_DIR / suite).glob('*.scn'))]
   _, states = settled_starts(cases, resolve('default'), 2)
   in_play = np.asarray(states.in_play).reshape(len(cases), 2, -1).sum(axis=-1)
   listed = np.array([len(c.objects) for c in cases])
@@ -344,14 +365,20 @@ def test_case_to_layout_places_occluders(tmp_path):
   np.testing.assert_allclose(layout.quat[0], quat_mul(yaw_quat(0.0), np.array([1.0, 0, 0, 0])))
 
 
-def test_every_object_of_the_occluded_suite_is_seen_by_a_camera():
-  """The occluded suite tests the fusion of two views: at the start each object shows at least
-  half of itself to one camera, some to one camera only, and camera 1 sees nothing in case 00."""
-  cases = [read_case(f) for f in sorted((SUITES_DIR / 'occluded').glob('*.scn'))]
+ONE_CAMERA_ONLY = {'occluded': 9, 'dev-occluded': 12}  # cases with an object seen by one camera only
+
+
+@pytest.mark.parametrize('suite', ['occluded', 'dev-occluded'])
+def test_every_object_of_the_occluded_suites_is_seen_by_a_camera(suite):
+  """The occluded suites test the fusion of two views: at the start each object shows at least
+  half of itself to one camera, some to one camera only (in dev-occluded, camera 1 sees nothing
+  in case 00)."""
+  cases = [read_case(f) for f in sorted((SUITES_DIR / suite).glob('*.scn'))]
   rows = visibility(cases, resolve('default'))
   assert len(rows) == 12 and [r['seen_by_none'] for r in rows] == [[]] * 12
-  assert all(r['seen_by_one_only'] for r in rows)
-  assert all(o['visible_fraction'][0] == 0.0 for o in rows[0]['objects'])
+  assert sum(bool(r['seen_by_one_only']) for r in rows) >= ONE_CAMERA_ONLY[suite]
+  if suite == 'dev-occluded':
+    assert all(o['visible_fraction'][0] == 0.0 for o in rows[0]['objects'])
 
 
 def test_the_high_validation_occluders_hide_as_much_as_the_tests():
@@ -367,7 +394,7 @@ def test_the_high_validation_occluders_hide_as_much_as_the_tests():
 
 def test_shipped_cases_pass_the_load_check():
   """No shipped case holds objects that interpenetrate as placed."""
-  for suite in ('random', 'ordered', 'occluded', 'isolated', 'vpg'):
+  for suite in SUITES:
     cases = [read_case(f) for f in suite_files([suite])[suite]]
     assert case_problems(cases, resolve('default')) == [], suite
 

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from mvcoba_jax.deploy import checks
+from mvcoba_jax.sim.push import push_length
 
 SIDE, TOP, HALF = 8, 0.4, 0.224
 
@@ -61,14 +62,14 @@ def test_an_unsafe_action_is_refused(q, angle, position, match):
 
 
 def test_a_push_is_cut_short_at_the_workspace_edge():
-  assert checks.push_length((0.0, 0.0), 0.3, 0.1, HALF) == 0.1  # well inside: as trained
-  assert math.isclose(checks.push_length((HALF - 0.04, 0.0), 0.0, 0.1, HALF), 0.04)
-  assert math.isclose(checks.push_length((0.0, -HALF + 0.03), -math.pi / 2, 0.1, HALF), 0.03)
-  corner = checks.push_length((HALF - 0.02, HALF - 0.05), math.pi / 4, 0.1, HALF)
+  assert push_length((0.0, 0.0), 0.3, 0.1, HALF) == 0.1  # well inside: as trained
+  assert math.isclose(push_length((HALF - 0.04, 0.0), 0.0, 0.1, HALF), 0.04)
+  assert math.isclose(push_length((0.0, -HALF + 0.03), -math.pi / 2, 0.1, HALF), 0.03)
+  corner = push_length((HALF - 0.02, HALF - 0.05), math.pi / 4, 0.1, HALF)
   assert math.isclose(corner, 0.02 * math.sqrt(2))  # the nearer edge along the diagonal
-  assert checks.push_length((HALF - 0.01, 0.0), math.pi, 0.1, HALF) == 0.1  # inwards: as trained
+  assert push_length((HALF - 0.01, 0.0), math.pi, 0.1, HALF) == 0.1  # inwards: as trained
   for angle in np.linspace(-math.pi, math.pi, 17):  # wherever it starts, it ends inside
-    length = checks.push_length((HALF - 0.005, -HALF + 0.005), angle, 0.1, HALF)
+    length = push_length((HALF - 0.005, -HALF + 0.005), angle, 0.1, HALF)
     end = (HALF - 0.005 + length * math.cos(angle), -HALF + 0.005 + length * math.sin(angle))
     assert 0 <= length <= 0.1 and max(abs(v) for v in end) <= HALF + 1e-12
 
@@ -81,9 +82,9 @@ def test_the_simulator_cuts_a_push_by_the_same_rule():
   rng = np.random.default_rng(0)
   starts = rng.uniform(-HALF, HALF, (64, 2))
   angles = rng.uniform(-math.pi, math.pi, 64)
-  cut = jax.jit(jax.vmap(lambda s, a: checks.push_length((s[0], s[1]), a, 0.1, HALF, xp=jnp)))
+  cut = jax.jit(jax.vmap(lambda s, a: push_length((s[0], s[1]), a, 0.1, HALF, xp=jnp)))
   simulated = np.asarray(cut(jnp.asarray(starts, jnp.float32), jnp.asarray(angles, jnp.float32)))
-  robot = [checks.push_length(tuple(s), a, 0.1, HALF) for s, a in zip(starts, angles)]
+  robot = [push_length(tuple(s), a, 0.1, HALF) for s, a in zip(starts, angles)]
   np.testing.assert_allclose(simulated, robot, atol=1e-6)
   assert (simulated < 0.1 - 1e-3).sum() >= 10  # some of them cut
 

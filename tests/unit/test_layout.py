@@ -103,10 +103,13 @@ def test_wheel_carries_presets_suites_and_entry_points(tmp_path):
                   str(source)], check=True, capture_output=True, timeout=600)
   wheel, = tmp_path.glob('mvcoba_jax-*.whl')
   names = zipfile.ZipFile(wheel).namelist()
-  for suite, count in (('random', 6), ('ordered', 6), ('occluded', 12), ('isolated', 16)):
+  for suite, count in (('random', 6), ('ordered', 8), ('packed-ring', 4), ('packed-t_shape', 4),
+                       ('packed-stack', 4), ('occluded', 12), ('isolated', 16),
+                       ('dev-random', 6), ('dev-ordered', 6), ('dev-occluded', 12)):
     assert sum(n.startswith(f'mvcoba_jax/suites/{suite}/') and n.endswith('.scn')
                for n in names) == count, suite
   assert sum(n.startswith('mvcoba_jax/suites/vpg/test-10-obj-') for n in names) == 11
+  assert 'mvcoba_jax/suites/manifest.json' in names
   assert {'mvcoba_jax/presets/default.py', 'mvcoba_jax/presets/tiny.py',
           'mvcoba_jax/sim/tabletop.py', 'mvcoba_jax/suites/vpg/LICENSE-vpg'} <= set(names)
   assert not any(n.startswith(('tests/', 'benchmarks/')) for n in names)

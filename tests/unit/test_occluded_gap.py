@@ -56,7 +56,7 @@ def test_only_the_named_conditions_are_written(tmp_path):
 
 
 def test_the_objects_stay_where_the_shipped_cases_put_them(folders):
-  for shipped in sorted((SUITES_DIR / 'occluded').glob('*.scn')):
+  for shipped in sorted((SUITES_DIR / 'dev-occluded').glob('*.scn')):
     objects = read_case(shipped).objects
     for folder in folders.values():
       assert read_case(folder / shipped.name).objects == objects

@@ -6,13 +6,14 @@ import pathlib
 
 import pytest
 
-from mvcoba_jax.sim import occluders
+from mvcoba_jax.sim import arrangements, occluders
 from mvcoba_jax.sim.scenarios import read_case
 from mvcoba_jax.suites import SUITES, SUITES_DIR, generate
 from mvcoba_jax.suites.similarity import largest_rigid_match
 
 VALIDATION = pathlib.Path(__file__).resolve().parents[2] / 'docs' / 'results' / 'validation'
-KINDS = ('val-random', 'val-ordered', 'val-occluded', 'val-occluded-high', 'val-heaps')
+KINDS = ('val-random', 'val-ordered', 'val-packed', 'val-occluded', 'val-occluded-high',
+         'val-heaps')
 
 
 def files(folder: pathlib.Path):
@@ -28,6 +29,11 @@ def test_validation_files_are_the_generators():
   assert sorted(p.name for p in VALIDATION.iterdir()) == sorted(KINDS)
   ordered = [f.read_text() for f in files(VALIDATION / 'val-ordered')]
   assert ordered == [generate.packed_case(i) for i in range(6)]
+  for i, f in enumerate(files(VALIDATION / 'val-packed')):
+    kind = arrangements.TRAINING[i % len(arrangements.TRAINING)]
+    draws = [generate.family_case(kind, generate.VALIDATION_SEED + 900 + 100 * t + i)
+             for t in range(20)]
+    assert f.read_text() in draws, f.name
   for i, f in enumerate(files(VALIDATION / 'val-occluded')):
     draws = [generate.drawn_occluded_case(occluders.VALIDATION,
                                           generate.VALIDATION_SEED + 500 + 100 * t + i, i)
@@ -49,9 +55,9 @@ def test_no_validation_case_is_a_shipped_case_moved(kind, shipped):
 
 
 def test_the_match_finds_a_case_turned_mirrored_and_shifted(tmp_path):
-  """The shipped framed square (without its isolated object) turned 32.7 degrees, mirrored and
-  moved matches all 12 of its objects; a brick bond of the same blocks shares few."""
-  source = read_case(SUITES_DIR / 'ordered' / 'ordered-03.scn')
+  """dev-ordered's framed square (without its isolated object) turned 32.7 degrees, mirrored
+  and moved matches all 12 of its objects; a brick bond of the same blocks shares few."""
+  source = read_case(SUITES_DIR / 'dev-ordered' / 'dev-ordered-03.scn')
   parts = [(o.shape, o.pos[0], -o.pos[1], 0.0) for o in source.objects[:-1]]
   moved = tmp_path / 'moved.scn'
   moved.write_text(generate.HEADER + ''.join(generate.turned(parts, 32.7, 0.01, -0.02)))
