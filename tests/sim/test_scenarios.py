@@ -365,7 +365,7 @@ def test_case_to_layout_places_occluders(tmp_path):
   np.testing.assert_allclose(layout.quat[0], quat_mul(yaw_quat(0.0), np.array([1.0, 0, 0, 0])))
 
 
-ONE_CAMERA_ONLY = {'occluded': 9, 'dev-occluded': 12}  # cases with an object seen by one camera only
+ONE_CAMERA_ONLY = {'occluded': 9, 'dev-occluded': 12}  # cases with an object one camera alone sees
 
 
 @pytest.mark.parametrize('suite', ['occluded', 'dev-occluded'])

@@ -1,6 +1,7 @@
 """The validation suites (docs/results/validation) are what the generator writes and share no
-layout with any shipped case: no rigid motion of the table puts half of a validation case's
-objects, and four or more, on same-shape objects of a shipped case (suites/similarity.py). Three
+layout with any test case: no rigid motion of the table puts half of a validation case's
+objects, and four or more, on same-shape objects of a sealed, isolated or VPG case
+(suites/similarity.py). Three
 objects of a few set apart can land on a heap of 36 by chance; a case moved lands whole."""
 import pathlib
 
@@ -8,7 +9,7 @@ import pytest
 
 from mvcoba_jax.sim import arrangements, occluders
 from mvcoba_jax.sim.scenarios import read_case
-from mvcoba_jax.suites import SUITES, SUITES_DIR, generate
+from mvcoba_jax.suites import SEALED, SUITES_DIR, generate
 from mvcoba_jax.suites.similarity import largest_rigid_match, shares_layout
 
 VALIDATION = pathlib.Path(__file__).resolve().parents[2] / 'docs' / 'results' / 'validation'
@@ -22,7 +23,10 @@ def files(folder: pathlib.Path):
 
 @pytest.fixture(scope='module')
 def shipped():
-  return [read_case(f) for suite in SUITES for f in files(SUITES_DIR / suite)]
+  """The test suites: sealed, isolated and VPG's (validation and development suites both serve
+  choosing, so they may share a template)."""
+  return [read_case(f) for suite in (*SEALED, 'isolated', 'vpg')
+          for f in files(SUITES_DIR / suite)]
 
 
 def test_validation_files_are_the_generators():
