@@ -11,8 +11,8 @@ each run once per claim, every method of the comparison at once (docs/results/se
   or validation draw holds (`arrangements.HELD_OUT`);
 - occluded/: 12 cases of objects set apart under occluders drawn from `sim/occluders.py`'s test
   region (whole, a pair of partial ones, or one of each), every object seen by a camera;
-- isolated/: 16 cases of one object alone (each shape twice, random place and yaw): a policy's
-  precision with nothing around to hold the object in place.
+and beside them isolated/: 16 cases of one object alone (each shape twice, random place and
+yaw), a policy's precision with nothing around to hold the object in place.
 `manifest.json` beside them records each sealed suite's seeds, the generator's commit and every
 file's SHA-256 (tests/unit/test_sealed_suites.py holds the files to it).
 
@@ -398,11 +398,14 @@ def passing(draw, tries: int = 20, seen_by_one: bool = False) -> str:
   raise RuntimeError(f'no case of {tries} draws passes the load check')
 
 
+FAMILY_HALF = 0.205  # m: a packed case's bounding circle keeps arrangements.MARGIN inside this
+
+
 def family_case(kind: str, seed: int) -> str:
   """A case of one packed arrangement of type `kind` (`arrangements.TYPES`) drawn from `seed` and
   placed in the workspace, with one isolated object in the corner farthest from it."""
   rng = np.random.default_rng(seed)
-  parts = arrangements.placed(arrangements.TYPES[kind](rng), rng, PILE_HALF + 0.05)
+  parts = arrangements.placed(arrangements.TYPES[kind](rng), rng, FAMILY_HALF)
   xy = np.array([(x, y) for _, x, y, _, _ in parts])
   corners = [np.array(c) * 0.17 for c in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
   corner = max(corners, key=lambda c: np.hypot(*(xy - c).T).min())
@@ -431,9 +434,8 @@ SAME_POSE = (0.01, 5.0)  # m, degrees: occluders nearer in both stand where anot
 def unlike_chosen_on(text: str) -> str:
   """`text`, unless one rigid motion of the table puts half its objects or half of a development
   or validation case's, and four or more, on same-shape objects of the other
-  (`similarity.shares_layout`), or
-  one of its occluders stands within `SAME_POSE` of one of theirs: then RuntimeError, and
-  `passing` draws again."""
+  (`similarity.shares_layout`), or one of its occluders stands within `SAME_POSE` of one of
+  theirs: then RuntimeError, and `passing` draws again."""
   with tempfile.TemporaryDirectory() as folder:
     path = pathlib.Path(folder) / 'case.scn'
     path.write_text(text)
@@ -462,8 +464,8 @@ SEALED_TRIES = 100
 
 
 def sealed_suites(only=None) -> dict[str, list[str]]:
-  """The sealed test suites (those named in `only`, if given): suite name -> the text of each of
-  its case files."""
+  """The sealed test suites and `isolated` (those named in `only`, if given): suite name -> the
+  text of each of its case files."""
   return _drawn({
       'random': lambda: [passing(lambda tries, n=n, i=i: heap_on_table(
           n, SEALED_SEED + 100 * tries + i, SEALED_SETTLE_KEYS))
