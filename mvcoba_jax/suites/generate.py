@@ -524,6 +524,10 @@ def _drawn(draws: dict, only) -> dict[str, list[str]]:
   return {name: draw() for name, draw in draws.items() if only is None or name in only}
 
 
+VALIDATION_SUITES = ('val-random', 'val-ordered', 'val-packed', 'val-occluded',
+                     'val-occluded-high', 'val-heaps')
+
+
 def validation_suites(cases: int = 6, only=None) -> dict[str, list[str]]:
   """Cases of each kind drawn apart from the shipped suites, to choose training settings on
   without tuning to the suites the results are reported on."""
@@ -560,6 +564,10 @@ def main(argv=None):
   parser.add_argument('--manifest', action='store_true',
                       help='write the sealed suites\' manifest.json from the files as they are')
   args = parser.parse_args(argv)
+  known = VALIDATION_SUITES if args.validation else (*SEALED, 'isolated', *DEVELOPMENT)
+  unknown = sorted(set(args.only or ()) - set(known))
+  if unknown:
+    parser.error(f'--only {" ".join(unknown)}: not among {", ".join(known)}')
   runtime.setup()
   if args.manifest:
     commit = subprocess.run(['git', 'rev-parse', 'HEAD'], capture_output=True, text=True,

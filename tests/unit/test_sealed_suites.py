@@ -77,3 +77,13 @@ def test_no_sealed_occluder_stands_where_a_chosen_on_one_did(chosen_on):
   distance, turn = occluders.separation(sealed, seen)
   near, turned = generate.SAME_POSE
   assert ((distance > near) | (turn > turned)).all(), (distance.min(), turn.min())
+
+
+def test_the_generator_refuses_a_suite_it_does_not_write(capsys):
+  """Before anything is drawn: a name that is not a suite of the kind asked for, in one line."""
+  for argv, listed in ((['--only', 'bogus'], 'dev-random'),
+                       (['--validation', 'out', '--only', 'random'], 'val-packed')):
+    with pytest.raises(SystemExit):
+      generate.main(argv)
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert f'--only {argv[-1]}: not among' in err and listed in err

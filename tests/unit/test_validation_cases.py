@@ -13,8 +13,7 @@ from mvcoba_jax.suites import SEALED, SUITES_DIR, generate
 from mvcoba_jax.suites.similarity import largest_rigid_match, shares_layout
 
 VALIDATION = pathlib.Path(__file__).resolve().parents[2] / 'docs' / 'results' / 'validation'
-KINDS = ('val-random', 'val-ordered', 'val-packed', 'val-occluded', 'val-occluded-high',
-         'val-heaps')
+KINDS = generate.VALIDATION_SUITES
 
 
 def files(folder: pathlib.Path):
