@@ -31,12 +31,12 @@ def height(shape: str) -> float:
   return float(shapes.SHAPES[shape].rest_extent[2])
 
 
-def _row(rng, names, y: float, gap: float, turned=None) -> tuple[list[tuple], float]:
-  """`names` end to end along x from 0, each along the row or turned across it (drawn unless
-  `turned`), their centres on the line y + half their depth; also the row's depth."""
+def _row(rng, names, y: float, gap: float) -> tuple[list[tuple], float]:
+  """`names` end to end along x from 0, each along the row or turned across it (drawn), their
+  centres half their depth above the line y; also the row's depth."""
   parts, cursor, depth = [], 0.0, 0.0
   for name in names:
-    yaw = 90.0 * (rng.integers(2) if turned is None else turned)
+    yaw = 90.0 * rng.integers(2)
     size = footprint(name, yaw)
     parts.append((name, cursor + 0.5 * size[0], y + 0.5 * size[1], yaw, 0.0))
     cursor, depth = cursor + size[0] + gap, max(depth, size[1])
