@@ -10,7 +10,7 @@ import numpy as np
 from mvcoba_jax import perception
 from mvcoba_jax.learner.task import Task
 from mvcoba_jax.sim import cameras
-from mvcoba_jax.sim.geometry import rotation_angle
+from mvcoba_jax.sim.geometry import pixel_to_world, rotation_angle
 from mvcoba_jax.sim.primitives import GRASP
 from mvcoba_jax.sim.push import push_length
 from mvcoba_jax.sim.scene import MAX_OPENING
@@ -84,7 +84,7 @@ def run_strip(trace, run: int, task: Task, scale: int = 3) -> np.ndarray:
       ends = (centre - half, centre + half)
       color = GRASP_OK_COLOR if bool(trace.grasp_success[run, t]) else GRASP_FAILED_COLOR
     else:  # push: from the pixel along (cos, sin), as far as it went (cut at the border)
-      start = -border + centre / scale * cell
+      start = pixel_to_world(int(trace.row[run, t]), int(trace.col[run, t]), cell, border)
       length = float(push_length(start, yaw, env.push_length, border)) / cell * scale
       ends = (centre, centre + length * np.array([np.cos(yaw), np.sin(yaw)]))
       color = PUSH_COLOR
