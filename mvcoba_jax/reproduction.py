@@ -24,7 +24,7 @@ from mvcoba_jax.evaluation.report import write_whole
 from mvcoba_jax.learner.run_log import plot_sweep
 from mvcoba_jax.learner.train import started, sweep_runs
 from mvcoba_jax.sim.scenarios import ScenarioError
-from mvcoba_jax.suites import SEALED, suite_files
+from mvcoba_jax.suites import CLAIM, suite_files
 
 # Rough speeds on a 2-core CPU, native backend, default preset (docs/results/reproduction.md:
 # 54144 actions in 88 min, 1350 case runs in 55 min): what the expected wall time is computed from.
@@ -43,7 +43,7 @@ RECIPES = {'mvcoba': 'reproduction', 'mvcoba_2fcn': 'authors', 'vpg': 'authors',
 def reproduce(config: Config, *, recipes=None, methods=tuple(paper.PAPER_NAMES),
               seeds=(0, 1, 2, 3, 4),
               actions: int = 3000, runs: int = 5, max_actions: int = 60,
-              suites=(*SEALED, 'vpg'),
+              suites=CLAIM,
               workdir='runs/reproduction', out='docs/results/reproduction',
               protocols=tuple(PROTOCOLS), progress: bool = True) -> dict[str, dict]:
   """Trains `methods` x `seeds` for `actions` actions each into WORKDIR/METHOD-sSEED (`api.sweep`),

@@ -26,7 +26,7 @@ from mvcoba_jax import config as config_lib
 from mvcoba_jax.cli import fail
 from mvcoba_jax.evaluation import paper
 from mvcoba_jax.reproduction import PROTOCOLS, RECIPES, reproduce
-from mvcoba_jax.suites import SEALED, SUITES
+from mvcoba_jax.suites import CLAIM, SUITES
 
 
 def main(argv=None) -> int:
@@ -39,7 +39,7 @@ def main(argv=None) -> int:
   parser.add_argument('--actions', type=int, default=3000, help='training actions per run')
   parser.add_argument('--runs', type=int, default=5, help='evaluation runs per case')
   parser.add_argument('--max-actions', type=int, default=60, help='action cap per run')
-  parser.add_argument('--suites', nargs='+', default=[*SEALED, 'vpg'], choices=SUITES,
+  parser.add_argument('--suites', nargs='+', default=list(CLAIM), choices=SUITES,
                       help='the sealed suites and VPG\'s cases by default; run once per claim')
   parser.add_argument('--workdir', default='runs/reproduction', help='the training sweep')
   parser.add_argument('--out', default='docs/results/reproduction',

@@ -17,6 +17,7 @@ from mvcoba_jax.sim.scenarios import ScenarioError
 SUITES_DIR = pathlib.Path(__file__).resolve().parent
 SEALED = ('random', 'ordered', 'packed-ring', 'packed-t_shape', 'packed-stack', 'occluded')
 DEVELOPMENT = ('dev-random', 'dev-ordered', 'dev-occluded')
+CLAIM = SEALED + ('vpg',)  # what a claim runs, once: the sealed suites and VPG's public cases
 SUITES = SEALED + ('isolated', 'vpg') + DEVELOPMENT  # every shipped suite
 
 

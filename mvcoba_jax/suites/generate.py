@@ -135,6 +135,14 @@ def random_case(n: int, seed: int, skip: frozenset = frozenset(),
   return text + line(isolated, COLOR_NAMES[n % 10], *ISOLATED_SPOT, 0), draws
 
 
+def text_case(text: str):
+  """The case a .scn file of `text` holds, read as mvcoba-eval reads one."""
+  with tempfile.TemporaryDirectory() as folder:
+    path = pathlib.Path(folder) / 'case.scn'
+    path.write_text(text)
+    return read_case(path)
+
+
 SETTLE_KEYS = 4  # placement jitters a random case must survive (drawn apart from mvcoba-eval's)
 SETTLE_EDGE = 0.01  # m: an object that settles this close to the border counts as leaving
 SETTLE_ROUNDS = 40
@@ -145,10 +153,7 @@ def leaving(text: str, seed: int, keys: int = SETTLE_KEYS) -> set[int]:
   border, under any of `keys` placement jitters, settled as mvcoba-eval settles a case."""
   config = resolve('default')
   half = config.scene.workspace_half
-  with tempfile.TemporaryDirectory() as folder:
-    path = pathlib.Path(folder) / 'case.scn'
-    path.write_text(text)
-    case = read_case(path)
+  case = text_case(text)
   env, states = suite_cases.settled_starts([case], config, keys, seed=1000 + seed)
   slots = case_slots(case, env)
   xy = np.asarray(jax.vmap(env.object_positions)(states))[:, slots, :2]
@@ -387,14 +392,11 @@ def passing(draw, tries: int = 20, seen_by_one: bool = False) -> str:
       text = draw(attempt)
     except RuntimeError:
       continue
-    with tempfile.TemporaryDirectory() as folder:
-      path = pathlib.Path(folder) / 'case.scn'
-      path.write_text(text)
-      case = read_case(path)
-      if suite_cases.case_problems([case], config):
-        continue
-      if not seen_by_one or not visibility([case], config)[0]['seen_by_none']:
-        return text
+    case = text_case(text)
+    if suite_cases.case_problems([case], config):
+      continue
+    if not seen_by_one or not visibility([case], config)[0]['seen_by_none']:
+      return text
   raise RuntimeError(f'no case of {tries} draws passes the load check')
 
 
@@ -436,10 +438,7 @@ def unlike_chosen_on(text: str) -> str:
   or validation case's, and four or more, on same-shape objects of the other
   (`similarity.shares_layout`), or one of its occluders stands within `SAME_POSE` of one of
   theirs: then RuntimeError, and `passing` draws again."""
-  with tempfile.TemporaryDirectory() as folder:
-    path = pathlib.Path(folder) / 'case.scn'
-    path.write_text(text)
-    case = read_case(path)
+  case = text_case(text)
   if any(shares_layout(case, other, of=min(len(case.objects), len(other.objects)))
          for other in chosen_on()):  # half of either case's objects: both tests' sense
     raise RuntimeError('a development or validation layout moved')
