@@ -49,7 +49,7 @@ def main():
     alone = CaseObject(name, (0.5, 0.5, 0.5), (*CENTRE, rest_height(name)),
                        rest_quat(name, np.deg2rad(args.yaw_deg)), line=0)
     layouts += [case_to_layout(Case(name, 'grasp_ceiling', (alone,)), env)] * rotations
-    top = float(shapes.SHAPES[name].rest_extent[2])
+    top = float(shapes.shape(name).rest_extent[2])
     rows += [(k, *CENTRE, top) for k in range(rotations)]
   batch = stack_layouts(layouts)
   k, x, y, z = (np.array(c) for c in zip(*rows))

@@ -42,7 +42,7 @@ def lift_table(path, base, rotations: int):
   start = jax.jit(env.reset_from_case)(case_to_layout(case, env))
   batch = jax.tree.map(lambda a: jnp.broadcast_to(a, (n * rotations, *a.shape)), start)
   xy = np.array([o.pos[:2] for o in case.objects])
-  top = np.array([float(shapes.SHAPES[o.shape].rest_extent[2]) for o in case.objects])
+  top = np.array([float(shapes.shape(o.shape).rest_extent[2]) for o in case.objects])
   obj = np.repeat(np.arange(n), rotations)
   actions = Action(primitive=jnp.full(n * rotations, GRASP, jnp.int32),
                    rotation=jnp.asarray(np.tile(np.arange(rotations), n), jnp.int32),

@@ -34,6 +34,7 @@ from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.deploy import model_file
 from mvcoba_jax.deploy.heightmaps import BELOW_TABLE, HEIGHT_UNIT
 from mvcoba_jax.policy import PolicyError, fingerprint, flat_params, load
+from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.sim.primitives import GRASP, PUSH
 
@@ -112,6 +113,9 @@ def describe(config: Config, method: methods.Method, params: dict[str, np.ndarra
       'method': config.network.method,
       'network': dataclasses.asdict(config.network),
       'config': config_lib.to_dict(config),
+      'objects': {'trained_on': shapes.pool_record(config.scene.pool),
+                  'meaning': 'the object slots of training\'s scene: the VPG blocks by name, '
+                             'mesh objects by path and the SHA-256 of their files'},
       'params': {'file': 'params.npz',
                  'arrays': {n: {'shape': list(a.shape), 'dtype': str(a.dtype)}
                             for n, a in params.items()},

@@ -40,7 +40,7 @@ def layout(env, objects):
   pos = np.array([park_position(i) for i in range(m)], np.float32)
   quat = np.tile(np.array([1, 0, 0, 0], np.float32), (m, 1))
   for slot, x, y, yaw in objects:
-    half = 0.5 * shapes.SHAPES[env.scene.index.slot_shapes[slot]].extent[2]
+    half = 0.5 * shapes.shape(env.scene.index.slot_shapes[slot]).extent[2]
     in_play[slot] = True
     pos[slot] = (x, y, half + 0.001)
     quat[slot] = (np.cos(yaw / 2), 0, 0, np.sin(yaw / 2))

@@ -38,7 +38,7 @@ def _parse(text: str, tp, key: str):
     return text
   args = typing.get_args(tp) if typing.get_origin(tp) is tuple else ()
   if args == (tuple[str, int], Ellipsis):  # scene.pool
-    items = [item.split(':') for item in text.split(',')]
+    items = [item.rsplit(':', 1) for item in text.split(',')]
     if not all(len(item) == 2 and _INT.fullmatch(item[1]) for item in items):
       raise fail('expected shape:count[,shape:count...], e.g. cube:3,disk:1')
     return tuple((name, _parse(n, int, key)) for name, n in items)

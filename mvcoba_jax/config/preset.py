@@ -13,7 +13,7 @@ from mvcoba_jax.config.validation import validate
 
 
 # The modules of mvcoba_jax.presets.
-PRESETS = ('default', 'reproduction', 'paper', 'paper_text', 'authors', 'gpu', 'tiny')
+PRESETS = ('default', 'objects', 'reproduction', 'paper', 'paper_text', 'authors', 'gpu', 'tiny')
 
 
 def load_preset(preset: str | pathlib.Path) -> Config:

@@ -23,12 +23,12 @@ LOW = ('cube', 'flat_box', 'disk', 'octagon')  # flat tops another block can res
 
 def footprint(shape: str, yaw_deg: float = 0.0) -> np.ndarray:
   """(along x, along y) of the shape resting at a quarter-turn `yaw_deg`."""
-  x, y, _ = shapes.SHAPES[shape].rest_extent
+  x, y, _ = shapes.shape(shape).rest_extent
   return np.array([y, x] if round(yaw_deg / 90) % 2 else [x, y], np.float64)
 
 
 def height(shape: str) -> float:
-  return float(shapes.SHAPES[shape].rest_extent[2])
+  return float(shapes.shape(shape).rest_extent[2])
 
 
 def _row(rng, names, y: float, gap: float) -> tuple[list[tuple], float]:

@@ -13,16 +13,11 @@ import importlib.util
 import math
 import typing
 
-from mvcoba_jax.sim.shapes import SHAPE_NAMES
+from mvcoba_jax.sim import shapes
+from mvcoba_jax.sim.errors import Error
 
 BACKENDS = ('auto', 'native', 'mjx', 'warp')
 DROPS = ('spread', 'heap')  # env.drop
-
-
-class Error(ValueError):
-  """What mvcoba-jax cannot use, said in one line that names it (a file and line, a config key
-  and its range, an argument): every error the library raises for its input is one of these
-  (`mvcoba_jax.Error`), so a script catches one class."""
 
 
 class ConfigError(Error):
@@ -173,11 +168,21 @@ class SceneConfig:
         'press_force': Between(0, 60, low_open=True),
         'object_density': Between(1, 100000), 'max_geom_pairs': Between(1, 100000),
         'max_contact_points': Between(1, 1000000), 'occluders': Between(0, 1, low_open=True)})
-    names = [name for name, _ in self.pool]
-    unknown = [n for n in names if n not in SHAPE_NAMES]
-    if unknown or len(set(names)) < len(names) or not self.num_slots:
-      raise ConfigError(f'scene.pool={self.pool!r}: expected distinct shapes of '
-                        f'{", ".join(SHAPE_NAMES)} with at least one slot in all')
+    try:
+      pool = tuple((shapes.reference(n), c) for n, c in self.pool)
+      extents = [shapes.shape(name).rest_extent for name, _ in pool]
+    except shapes.meshes.MeshError as e:
+      raise ConfigError(f'scene.pool: {e}') from None
+    names = [name for name, _ in pool]
+    if len(set(names)) < len(names) or not self.num_slots:
+      raise ConfigError(f'scene.pool={self.pool!r}: expected distinct shapes (blocks: '
+                        f'{", ".join(shapes.SHAPE_NAMES)}; or mesh files and folders) with at '
+                        'least one slot in all')
+    object.__setattr__(self, 'pool', pool)  # mesh paths absolute: the config names one file
+    for name, extent in zip(names, extents):
+      if max(extent[:2]) > 2 * self.workspace_half:
+        raise ConfigError(f'scene.pool: {name}: {max(extent[:2]):g} m across, wider than the '
+                          f'workspace ({2 * self.workspace_half:g} m, scene.workspace_half)')
     if not self.cameras:
       raise ConfigError('scene.cameras: at least one camera')
     if self.backend == 'warp' and importlib.util.find_spec('warp') is None:

@@ -9,7 +9,9 @@ or `# ` after a field, starts a comment:
     cube       blue     0.000   0.000   45       0.052    # stacked on the flat box
     occluder   0        0.300   0.000   0.150    90       # occluder slot, x, y, z, yaw_deg
 
-- shape: one of `shapes.SHAPE_NAMES`.
+- shape: one of `shapes.SHAPE_NAMES`, or a mesh file or folder of convex parts, its path
+  relative to the case file, with an optional scale (`mug.obj`, `scans/mug.stl@0.001`:
+  `meshes`); it rests as the file has it, z up.
 - colour: a VPG palette name (blue, green, brown, orange, yellow, gray, red, purple, cyan, pink)
   or `#rrggbb`.
 - x, y: metres in the workspace frame (centre 0, 0); |x|, |y| must lie within the workspace.
@@ -36,7 +38,7 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 
-from mvcoba_jax.sim import shapes
+from mvcoba_jax.sim import meshes, shapes
 from mvcoba_jax.sim.config import Error
 from mvcoba_jax.sim.geometry import euler_xyz_matrix, matrix_to_quat, quat_mul, yaw_quat
 from mvcoba_jax.sim.scene import park_position
@@ -147,12 +149,12 @@ def _color_text(color) -> str:
 
 def rest_height(shape: str) -> float:
   """Centre height of `shape` dropped on the table in its rest orientation."""
-  return 0.5 * float(shapes.SHAPES[shape].rest_extent[2]) + DROP_GAP
+  return 0.5 * float(shapes.shape(shape).rest_extent[2]) + DROP_GAP
 
 
 def rest_quat(shape: str, yaw: float) -> tuple[float, ...]:
   """Orientation (w, x, y, z) of `shape` resting on the table, turned by `yaw` (rad)."""
-  quat = quat_mul(yaw_quat(jnp.float32(yaw)), jnp.asarray(shapes.SHAPES[shape].rest_quat))
+  quat = quat_mul(yaw_quat(jnp.float32(yaw)), jnp.asarray(shapes.shape(shape).rest_quat))
   return tuple(float(q) for q in np.asarray(quat))
 
 
@@ -197,8 +199,7 @@ def _read_scn(path, text: str, workspace_half: float, workspace_top: float):
     _check_count(path, n, fields, _OBJECT_FIELDS, optional=1)
     shape = fields[0]
     if shape not in shapes.SHAPES:
-      raise _error(path, n, 'shape', f'unknown shape {shape!r}; known: '
-                   f'{", ".join(shapes.SHAPE_NAMES)}')
+      shape = _mesh_shape(path, n, shape, workspace_half)
     color = _color(path, n, fields[1])
     x, y, yaw = (_number(path, n, name, t) for name, t in zip(('x', 'y', 'yaw_deg'), fields[2:5]))
     for name, v in (('x', x), ('y', y)):
@@ -208,7 +209,7 @@ def _read_scn(path, text: str, workspace_half: float, workspace_top: float):
     z = rest_height(shape)
     if len(fields) == 6:
       z = _number(path, n, 'z', fields[5])
-      lowest = 0.5 * float(shapes.SHAPES[shape].rest_extent[2])
+      lowest = 0.5 * float(shapes.shape(shape).rest_extent[2])
       if z < lowest:
         raise _error(path, n, 'z', f'{z:g} puts the {shape} into the table (lowest {lowest:g})')
       if z > workspace_top:
@@ -217,11 +218,23 @@ def _read_scn(path, text: str, workspace_half: float, workspace_top: float):
   return objects, occluders
 
 
+def _mesh_shape(path, line: int, text: str, workspace_half: float) -> str:
+  """The absolute mesh reference of a `.scn` line's shape field, read and checked here."""
+  try:
+    reference = shapes.reference(text, pathlib.Path(path).parent)
+    extent = shapes.shape(reference).rest_extent
+  except meshes.MeshError as e:
+    raise _error(path, line, 'shape', str(e)) from None
+  if max(extent[:2]) > 2 * workspace_half:
+    raise _error(path, line, 'shape', f'{max(extent[:2]):g} m across, wider than the workspace')
+  return reference
+
+
 def write_scenario(case: Case, path) -> None:
   """Writes `case` in our format. Objects must rest in their shape's `rest_quat` turned about z."""
   lines = [f'# {case.name} (from {case.path})', '# shape colour x y yaw_deg [z]']
   for obj in case.objects:
-    rest = np.asarray(shapes.SHAPES[obj.shape].rest_quat) * np.array([1.0, -1.0, -1.0, -1.0])
+    rest = np.asarray(shapes.shape(obj.shape).rest_quat) * np.array([1.0, -1.0, -1.0, -1.0])
     turn = np.asarray(quat_mul(jnp.asarray(obj.quat), jnp.asarray(rest)))  # quat * rest^-1
     if max(abs(turn[1]), abs(turn[2])) > 1e-3:
       raise ScenarioError(f'{case.path}:{obj.line}: the {obj.shape} is not in its rest '
@@ -249,7 +262,7 @@ def _vpg_pose(shape: str, euler, z: float):
   1 mm above the table), ties (within 0.5 mm) going to the face R holds most nearly down, and
   keeps the yaw of its long horizontal side from R.
   """
-  extent = np.asarray(shapes.SHAPES[shape].extent)
+  extent = np.asarray(shapes.shape(shape).extent)
   rot = euler_xyz_matrix(*euler)
   if shape in VPG_TURNED:
     rot = rot @ VPG_IMPORT_TURN
@@ -524,4 +537,4 @@ def half_height(shape: str, quat) -> float:
   """Half the vertical size of `shape`'s bounding box in orientation `quat` (w, x, y, z)."""
   rot = np.zeros(9)
   mujoco.mju_quat2Mat(rot, np.asarray(quat, float))
-  return 0.5 * float((np.abs(rot.reshape(3, 3)) @ np.asarray(shapes.SHAPES[shape].extent))[2])
+  return 0.5 * float((np.abs(rot.reshape(3, 3)) @ np.asarray(shapes.shape(shape).extent))[2])

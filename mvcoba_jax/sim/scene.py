@@ -47,29 +47,26 @@ def camera_xyaxes(cam: CameraConfig) -> np.ndarray:
 
 def slot_shapes(scene: SceneConfig) -> tuple[str, ...]:
   """Shape name of every object slot, in slot order."""
-  for name, count in scene.pool:
-    if name not in shapes.SHAPES:
-      raise ValueError(f'scene.pool names unknown shape {name!r}; known: {shapes.SHAPE_NAMES}')
-    if count < 0:
-      raise ValueError(f'scene.pool gives a negative count for {name!r}')
   return tuple(name for name, count in scene.pool for _ in range(count))
 
 
 def build_mjcf(scene: SceneConfig) -> str:
   slots = slot_shapes(scene)
-  used_meshes = sorted({p.mesh for s in slots for p in shapes.SHAPES[s].parts if p.mesh})
-  verts = shapes.mesh_vertices()
-  meshes = '\n'.join(f'    <mesh name="{m}" vertex="{_fmt(verts[m])}"/>' for m in used_meshes)
+  kinds = list(dict.fromkeys(slots))  # each shape's meshes once, named by its place here
+  meshes = '\n'.join(
+      f'    <mesh name="m{k}_{j}" vertex="{_fmt(part.vertices)}"/>'
+      for k, name in enumerate(kinds) for j, part in enumerate(shapes.shape(name).parts)
+      if part.kind == 'mesh')
 
   bodies = []
   for i, shape_name in enumerate(slots):
     geoms = []
-    for j, part in enumerate(shapes.SHAPES[shape_name].parts):
+    for j, part in enumerate(shapes.shape(shape_name).parts):
       where = f'name="obj{i}_{j}" pos="{_fmt(part.pos)}"'
       if part.kind == 'box':
         geoms.append(f'<geom {where} type="box" size="{_fmt(part.half_size)}"/>')
       else:
-        geoms.append(f'<geom {where} type="mesh" mesh="{part.mesh}"/>')
+        geoms.append(f'<geom {where} type="mesh" mesh="m{kinds.index(shape_name)}_{j}"/>')
     bodies.append(f'    <body name="obj{i}" pos="{_fmt(park_position(i))}">'
                   f'<freejoint name="obj{i}"/>{"".join(geoms)}</body>')
 

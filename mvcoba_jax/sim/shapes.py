@@ -1,15 +1,22 @@
-"""The VPG block set, built procedurally in each block's VPG mesh frame.
+"""Shapes: the VPG block set, built procedurally in each block's VPG mesh frame, and objects from
+mesh files (`meshes`).
 
-Every shape is described in the frame of VPG's mesh file (origin at the bounding-box centre), so
+Every block is described in the frame of VPG's mesh file (origin at the bounding-box centre), so
 the Euler angles of VPG's test cases apply to our bodies unchanged. Curved shapes are convex
-polygonal prisms (MJX has no cylinder-box collision); the concave arch is three boxes.
+polygonal prisms (MJX has no cylinder-box collision); the concave arch is three boxes. Any other
+name is a mesh reference (`mug.obj`, `scans/mug/`, `mug.stl@0.001`): `shape` reads it once.
 """
 from __future__ import annotations
 
 import dataclasses
+import functools
+import os
+import pathlib
 
 import mujoco
 import numpy as np
+
+from mvcoba_jax.sim import meshes
 
 # VPG's ten block colours (RGB 0..1), in VPG's order.
 COLORS = np.array([
@@ -22,17 +29,17 @@ CYLINDER_SIDES = 12
 
 @dataclasses.dataclass(frozen=True)
 class Part:
-  """One collision geom of a shape: a box (half sizes) or a convex mesh (vertices)."""
+  """One collision geom of a shape: a box (half sizes) or a convex mesh (its hull's vertices)."""
   kind: str  # 'box' | 'mesh'
   pos: tuple[float, float, float] = (0.0, 0.0, 0.0)
   half_size: tuple[float, float, float] | None = None
-  mesh: str | None = None
+  vertices: tuple[tuple[float, float, float], ...] | None = None
 
 
 @dataclasses.dataclass(frozen=True)
 class Shape:
   name: str
-  vpg_file: str
+  vpg_file: str | None  # the block's mesh file in VPG's cases; None for mesh objects
   extent: tuple[float, float, float]  # axis-aligned size in the mesh frame (m)
   parts: tuple[Part, ...]
   # Orientation (w, x, y, z) in which random drops place the shape, before their random yaw.
@@ -64,8 +71,12 @@ def _regular_polygon(n: int, across_flats: float, phase: float) -> np.ndarray:
   return np.stack([circumradius * np.cos(ang), circumradius * np.sin(ang)], axis=1)
 
 
-def mesh_vertices() -> dict[str, np.ndarray]:
-  """Convex meshes used by the shapes, keyed by mesh name."""
+def _mesh(vertices: np.ndarray) -> Part:
+  return Part('mesh', vertices=tuple(tuple(float(c) for c in v) for v in vertices))
+
+
+def _block_meshes() -> dict[str, Part]:
+  """The blocks' convex meshes, keyed by block name."""
   tri = np.array([[-0.0933 / 2, -0.0486 / 2], [0.0933 / 2, -0.0486 / 2], [0.0, 0.0486 / 2]])
   # Triangle is in the x-z plane: (u, v) = (x, z), extruded along y.
   prism = _prism_vertices(tri, axis=1, length=0.05)
@@ -74,15 +85,17 @@ def mesh_vertices() -> dict[str, np.ndarray]:
   cylinder = _prism_vertices(_regular_polygon(n, 0.0448, np.pi / n), axis=2, length=0.05)
   disk = _prism_vertices(_regular_polygon(n, 0.050, np.pi / n), axis=2, length=0.025)
   octagon = _prism_vertices(_regular_polygon(8, 0.0605, np.pi / 8), axis=0, length=0.025)
-  return {'prism': prism, 'cylinder': cylinder, 'disk': disk, 'octagon': octagon}
+  return {'prism': _mesh(prism), 'cylinder': _mesh(cylinder), 'disk': _mesh(disk),
+          'octagon': _mesh(octagon)}
 
 
 def _box(hx, hy, hz, pos=(0.0, 0.0, 0.0)) -> Part:
   return Part('box', pos=pos, half_size=(hx, hy, hz))
 
 
+_MESHES = _block_meshes()
 SHAPES: dict[str, Shape] = {s.name: s for s in [
-    Shape('prism', '0.obj', (0.0933, 0.050, 0.0486), (Part('mesh', mesh='prism'),)),
+    Shape('prism', '0.obj', (0.0933, 0.050, 0.0486), (_MESHES['prism'],)),
     # Arch: two 2.5 cm legs and a 2.5 cm thick top span; the half-round cut-out is approximated
     # by a 5 x 2.5 cm rectangular opening.
     Shape('arch', '1.obj', (0.100, 0.050, 0.050), (
@@ -91,16 +104,40 @@ SHAPES: dict[str, Shape] = {s.name: s for s in [
         _box(0.025, 0.025, 0.0125, (0.0, 0.0, 0.0125)),
     )),
     # Dropped lying on an octagonal face (axis vertical): a quarter turn about y.
-    Shape('octagon', '2.obj', (0.025, 0.0605, 0.0605), (Part('mesh', mesh='octagon'),),
+    Shape('octagon', '2.obj', (0.025, 0.0605, 0.0605), (_MESHES['octagon'],),
           rest_quat=(np.sqrt(0.5), 0.0, np.sqrt(0.5), 0.0)),
     Shape('flat_box', '3.obj', (0.100, 0.050, 0.025), (_box(0.05, 0.025, 0.0125),)),
     Shape('cube', '4.obj', (0.050, 0.050, 0.050), (_box(0.025, 0.025, 0.025),)),
     Shape('tall_box', '6.obj', (0.050, 0.050, 0.100), (_box(0.025, 0.025, 0.05),)),
-    Shape('disk', '7.obj', (0.050, 0.050, 0.025), (Part('mesh', mesh='disk'),)),
-    Shape('cylinder', '8.obj', (0.0448, 0.0448, 0.050), (Part('mesh', mesh='cylinder'),)),
+    Shape('disk', '7.obj', (0.050, 0.050, 0.025), (_MESHES['disk'],)),
+    Shape('cylinder', '8.obj', (0.0448, 0.0448, 0.050), (_MESHES['cylinder'],)),
 ]}
 
 SHAPE_NAMES = tuple(SHAPES)
+
+
+def reference(text: str, base: pathlib.Path | None = None) -> str:
+  """The shape name `text` stands for: a block's name, else the absolute mesh reference (a path
+  relative to `base`, else to the working folder). A bare word that is neither is refused."""
+  if text in SHAPES:
+    return text
+  absolute = meshes.absolute(text, base)
+  if not any(c in text for c in '/.@') and not os.path.exists(absolute):
+    raise meshes.MeshError(f'unknown shape {text!r}; known: {", ".join(SHAPE_NAMES)}, or a '
+                           'mesh file or folder')
+  return absolute
+
+
+@functools.lru_cache(maxsize=256)
+def shape(name: str) -> Shape:
+  """The block of that name, else the object the mesh reference names (meshes.MeshError if it
+  cannot be one)."""
+  if name in SHAPES:
+    return SHAPES[name]
+  parts = tuple(_mesh(v) for v in meshes.parts(name))
+  every = np.concatenate([np.asarray(p.vertices) for p in parts])
+  extent = tuple(float(e) for e in every.max(0) - every.min(0))
+  return Shape(name, None, extent, parts)
 # Block tables: the shape each mesh file name of a VPG-format case file stands for. Files written by
 # other simulators number their blocks differently; a table is chosen per suite (`--blocks`).
 # 'mvcoba': the MV-COBA authors' block set, whose 0.obj is the short polygonal prism (VPG's 2.obj,
@@ -114,14 +151,23 @@ BLOCK_TABLES = {
 
 
 def add_block_table(name: str, table: dict[str, str]) -> None:
-  """Registers a block table: mesh file name -> one of SHAPE_NAMES."""
-  unknown = sorted(set(table.values()) - set(SHAPE_NAMES))
-  if unknown:
-    raise ValueError(f'block table {name!r}: unknown shapes {", ".join(unknown)}')
-  BLOCK_TABLES[name] = dict(table)
+  """Registers a block table: mesh file name -> one of SHAPE_NAMES or a mesh reference (made
+  absolute here, relative to the working folder)."""
+  table = {k: reference(v) for k, v in table.items()}
+  for reference in table.values():
+    shape(reference)
+  BLOCK_TABLES[name] = table
+
+
+def pool_record(pool) -> list[dict]:
+  """What a policy records of the objects it trained on: each pool entry's name, its count and,
+  for a mesh object, the SHA-256 of its files (`meshes.content_hash`)."""
+  return [{'shape': name, 'slots': count} if name in SHAPES else
+          {'shape': name, 'slots': count, 'sha256': meshes.content_hash(name)}
+          for name, count in pool]
 
 
 def footprint_radius(name: str) -> float:
   """Radius of the circle that bounds the shape's footprint when resting in `rest_quat`."""
-  ex, ey, _ = SHAPES[name].rest_extent
+  ex, ey, _ = shape(name).rest_extent
   return 0.5 * float(np.hypot(ex, ey))

@@ -138,7 +138,7 @@ class Tabletop:
     self._park_qpos = self._parking.park_qpos
     self._gripper_park = jnp.array(GRIPPER_PARK + (0.0, primitives.FINGER_OPEN,
                                                    primitives.FINGER_OPEN), jnp.float32)
-    slot_shapes = [shapes.SHAPES[s] for s in idx.slot_shapes]
+    slot_shapes = [shapes.shape(s) for s in idx.slot_shapes]
     self._rest_quat = jnp.asarray([s.rest_quat for s in slot_shapes], jnp.float32)
     self._rest_half_height = jnp.asarray([0.5 * s.rest_extent[2] for s in slot_shapes],
                                          jnp.float32)

@@ -75,7 +75,7 @@ def line(shape, colour, x, y, yaw, z=None):
 
 
 def half_height(shape):
-  return 0.5 * float(shapes.SHAPES[shape].rest_extent[2])
+  return 0.5 * float(shapes.shape(shape).rest_extent[2])
 
 
 PILE_HALF = 0.155  # object centres of a random heap keep 7 cm inside the workspace (22.4 cm)
@@ -95,10 +95,12 @@ def support(placed, spot, radius: float) -> float:
   return top if distance < 0.5 * r else np.inf
 
 
-def random_case(n: int, seed: int, skip: frozenset = frozenset(),
-                spots_per_object: int = 64) -> tuple[str, list[int]]:
-  """A heap of n objects over the workspace and one isolated object in a corner kept clear; also
-  the draw each object came from (the case's object k is draw `draws[k]`).
+def random_case(n: int, seed: int, skip: frozenset = frozenset(), spots_per_object: int = 64,
+                pool: tuple[str, ...] = CLUTTER_SHAPES,
+                isolated: bool = True) -> tuple[str, list[int]]:
+  """A heap of n objects drawn from `pool` over the workspace and, with `isolated`, one isolated
+  block in a corner kept clear; also the draw each object came from (the case's object k is draw
+  `draws[k]`).
 
   Objects are drawn one after another from the seed's stream; draws in `skip` are passed over
   (the file names them), as is a draw that no spot rests, and later ones take their place. Each
@@ -108,17 +110,19 @@ def random_case(n: int, seed: int, skip: frozenset = frozenset(),
   not the decimetres of a drop that scatters them out of the workspace.
   """
   rng = np.random.default_rng(seed)
-  isolated = ISOLATED[seed % len(ISOLATED)]
+  corner = ISOLATED[seed % len(ISOLATED)] if isolated else None
   placed = []  # (x, y, footprint radius, top z)
   draws = []
   text = HEADER + (f'# draws passed over: {" ".join(map(str, sorted(skip)))}\n' if skip else '')
   draw = 0
   while len(draws) < n:
-    shape = CLUTTER_SHAPES[rng.integers(len(CLUTTER_SHAPES))]
+    shape = pool[rng.integers(len(pool))]
     radius = shapes.footprint_radius(shape)
-    clear = radius + shapes.footprint_radius(isolated) + ISOLATED_GAP
     spots = rng.uniform(-PILE_HALF, PILE_HALF, size=(4 * spots_per_object, 2))
-    spots = spots[np.hypot(*(spots - ISOLATED_SPOT).T) > clear][:spots_per_object]
+    if corner:
+      clear = radius + shapes.footprint_radius(corner) + ISOLATED_GAP
+      spots = spots[np.hypot(*(spots - ISOLATED_SPOT).T) > clear]
+    spots = spots[:spots_per_object]
     yaw = rng.uniform(0, 180)
     draw += 1
     if draw - 1 in skip:
@@ -132,7 +136,7 @@ def random_case(n: int, seed: int, skip: frozenset = frozenset(),
     text += line(shape, COLOR_NAMES[len(draws) % 10], *spots[best], yaw,
                  z if base[best] else None)
     draws.append(draw - 1)
-  return text + line(isolated, COLOR_NAMES[n % 10], *ISOLATED_SPOT, 0), draws
+  return text + (line(corner, COLOR_NAMES[n % 10], *ISOLATED_SPOT, 0) if corner else ''), draws
 
 
 def text_case(text: str):
@@ -161,13 +165,13 @@ def leaving(text: str, seed: int, keys: int = SETTLE_KEYS) -> set[int]:
   return set(np.flatnonzero(~stays.all(axis=0)).tolist())
 
 
-def heap_on_table(n: int, seed: int, keys: int = SETTLE_KEYS) -> str:
+def heap_on_table(n: int, seed: int, keys: int = SETTLE_KEYS, **heap) -> str:
   """A random case of n objects that all stay on the table while it settles: objects that leave
   (`leaving`) are passed over and redrawn until none does (benchmarks/suite_settling.py measures
-  it with mvcoba-eval's own jitters)."""
+  it with mvcoba-eval's own jitters). `heap`: `random_case`'s pool and isolated."""
   skip = set()
   for _ in range(SETTLE_ROUNDS):
-    text, draws = random_case(n, seed, frozenset(skip))
+    text, draws = random_case(n, seed, frozenset(skip), **heap)
     gone = leaving(text, seed, keys)
     if not gone:
       return text
@@ -314,7 +318,7 @@ def hexagonal(rng) -> list[tuple]:
   """2-3 rows of 3-4 round objects of one shape, each row nested into the one before (the
   densest packing of discs), 1 mm apart."""
   shape = rng.choice(ROUND)
-  d = shapes.SHAPES[shape].rest_extent[0] + 0.001
+  d = shapes.shape(shape).rest_extent[0] + 0.001
   rows, across = rng.integers(2, 4), rng.integers(3, 5)
   return [(shape, (i + 0.5 * (r % 2)) * d, r * d * np.sqrt(3) / 2, 0)
           for r in range(rows) for i in range(across)]

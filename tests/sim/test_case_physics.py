@@ -67,7 +67,7 @@ def test_pinwheel_forces_a_push():
   start = jax.jit(env.reset_from_case)(case_to_layout(case, env))
   n = len(case.objects)
   batch = jax.tree.map(lambda a: np.broadcast_to(a, (n * rotations, *a.shape)), start)
-  rows = [(GRASP, k, *o.pos[:2], float(shapes.SHAPES[o.shape].rest_extent[2]))
+  rows = [(GRASP, k, *o.pos[:2], float(shapes.shape(o.shape).rest_extent[2]))
           for o in case.objects for k in range(rotations)]
   end, info = jax.jit(jax.vmap(env.step))(batch, actions(rows))
   slots = np.repeat(case_slots(case, env), rotations)

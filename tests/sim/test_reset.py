@@ -109,7 +109,7 @@ def test_packed_share_lays_objects_side_by_side():
   in_play = np.asarray(states.in_play)
   assert ((in_play.sum(axis=1) >= 2) & (in_play.sum(axis=1) <= env.config.env.num_objects)).all()
   pos = np.asarray(jax.vmap(env.object_positions)(states))
-  size = np.array([shapes.SHAPES[s].rest_extent[:2].max() for s in env.scene.index.slot_shapes])
+  size = np.array([shapes.shape(s).rest_extent[:2].max() for s in env.scene.index.slot_shapes])
   yaws = []
   for b in range(len(keys)):
     assert max_penetration(env, states.sim.qpos[b]) < 0.002

@@ -42,7 +42,7 @@ def test_presets_are_valid(preset):
     ('scene.backend=jax', "scene.backend='jax': allowed values are auto, native, mjx, warp"),
     ('scene.pool=cube', 'expected shape:count'),
     ('scene.pool=cube:1,cube:2', 'expected distinct shapes'),
-    ('scene.pool=lego:2', 'expected distinct shapes'),
+    ('scene.pool=lego:2', "scene.pool: unknown shape 'lego'; known: prism, arch"),
     ('scene.contact_timeconst=0.001', 'below 2 x scene.timestep'),
     ('scene.cameras=1', 'cannot be set from the command line'),
     ('perception.change_min=0.5', 'perception.change_min=0.5 must be below'),
