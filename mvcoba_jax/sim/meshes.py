@@ -67,7 +67,7 @@ def split_reference(reference: str) -> tuple[pathlib.Path, float]:
 def absolute(reference: str, base: pathlib.Path | None = None) -> str:
   """`reference` with its path made absolute (relative to `base`, else the working folder)."""
   path, scale = split_reference(reference)
-  full = os.path.normpath((base or pathlib.Path.cwd()) / path)
+  full = os.path.abspath(pathlib.Path(base or '.') / path)
   return full if scale == 1.0 else f'{full}@{scale:g}'
 
 

@@ -6,7 +6,9 @@ three types it never draws, held-out occluders) and `isolated` are ours (`.scn`,
 hard cases in VPG's text format, copied under its BSD license (`vpg/`). The development suites
 (`DEVELOPMENT`) are the test suites of every result before the sealed ones: they chose recipes,
 so they serve choosing now, as validation does. A sealed suite is run once per claim, every method
-of the comparison at once, and no figure from it feeds a choice (docs/results/sealed.md).
+of the comparison at once, and no figure from it feeds a choice (docs/results/sealed.md). `novel`
+holds objects no training pool holds (`novel.py`, docs/objects.md) and is run the same way; its
+validation twin, `val-novel`, is for choosing.
 """
 from __future__ import annotations
 
@@ -18,7 +20,8 @@ SUITES_DIR = pathlib.Path(__file__).resolve().parent
 SEALED = ('random', 'ordered', 'packed-ring', 'packed-t_shape', 'packed-stack', 'occluded')
 DEVELOPMENT = ('dev-random', 'dev-ordered', 'dev-occluded')
 CLAIM = SEALED + ('vpg',)  # what a claim runs, once: the sealed suites and VPG's public cases
-SUITES = SEALED + ('isolated', 'vpg') + DEVELOPMENT  # every shipped suite
+NOVEL = 'novel'  # the held-out everyday objects
+SUITES = SEALED + ('isolated', 'vpg', NOVEL) + DEVELOPMENT  # every shipped suite
 
 
 def suite_files(names: list[str]) -> dict[str, list[pathlib.Path]]:

@@ -13,7 +13,7 @@ import pytest
 from mvcoba_jax.config import resolve
 from mvcoba_jax.suites.cases import case_problems, pool_for, settled_starts, suite_config
 from mvcoba_jax.suites.visibility import visibility
-from mvcoba_jax.sim import arrangements, occluders, shapes
+from mvcoba_jax.sim import arrangements, occluders, procedural, shapes
 from mvcoba_jax.sim.geometry import quat_mul, yaw_quat
 from mvcoba_jax.sim.scenarios import (
   Case,
@@ -27,7 +27,7 @@ from mvcoba_jax.sim.scenarios import (
 )
 from mvcoba_jax.sim.scene import GRIPPER_PARK, park_position
 from mvcoba_jax.sim.tabletop import Tabletop
-from mvcoba_jax.suites import SUITES, SUITES_DIR, generate, suite_files
+from mvcoba_jax.suites import SUITES, SUITES_DIR, generate, novel, suite_files
 from tests.penetration import max_penetration
 
 VPG_CASES = SUITES_DIR / 'vpg'
@@ -313,7 +313,33 @@ def test_shipped_suites_are_generated_and_start_apart(suite, generated):
     assert deepest < 0.002, (case.name, deepest)
 
 
-@pytest.mark.parametrize('suite', ['random', 'dev-random'])
+def test_the_novel_suite_is_generated_from_the_held_out_objects_alone():
+  """novel/ is what `python -m mvcoba_jax.suites.novel` writes (heaps and packed rows drawn by
+  NumPy from its seeds; which draw passed is physics, tested below): everyday objects only, none
+  of which any training pool or validation case holds."""
+  files = sorted((SUITES_DIR / 'novel').glob('*.scn'))
+  cases = [read_case(f) for f in files]
+  everyday = novel.objects(novel.EVERYDAY)
+  assert [len(c.objects) for c in cases[:4]] == list(novel.HEAPS) and len(cases) == 8
+  assert {o.shape for c in cases for o in c.objects} <= set(everyday)
+  relative = lambda text: text.replace(str(procedural.OBJECTS), '../../sim/objects').replace(
+      'mvcoba_jax.suites.generate', 'mvcoba_jax.suites.novel')
+  for i, (path, n) in enumerate(zip(files, novel.HEAPS)):
+    skip = frozenset(int(d) for line in path.read_text().splitlines()
+                     if line.startswith('# draws passed over:') for d in line.split(':')[1].split())
+    draws = [relative(generate.random_case(n, novel.NOVEL_SEED + 100 * t + i, skip, pool=tuple(
+        everyday), isolated=False)[0]) for t in range(5)]
+    assert path.read_text() in draws, path.name
+  members = [o for o in everyday if pathlib.Path(o).name in novel.PACKABLE_EVERYDAY]
+  for i, path in enumerate(files[4:]):
+    draws = [relative(novel.packed(members, novel.NOVEL_SEED + 50 + 100 * t + i))
+             for t in range(5)]
+    assert path.read_text() in draws, path.name
+  training = {n for n, _ in resolve('objects').scene.pool}
+  assert not training & set(everyday)
+
+
+@pytest.mark.parametrize('suite', ['random', 'dev-random', 'novel'])
 def test_random_heaps_stay_on_the_table(suite):
   """Every object of every heap stays in the workspace while the case settles as mvcoba-eval
   starts its runs (its jitters, two runs)."""

@@ -6,7 +6,7 @@ import pytest
 import trimesh
 
 from mvcoba_jax.config import ConfigError, override, resolve
-from mvcoba_jax.sim import meshes, procedural, shapes
+from mvcoba_jax.sim import everyday, meshes, procedural, shapes
 from mvcoba_jax.sim.scene import MAX_OPENING
 from mvcoba_jax.sim.scenarios import ScenarioError, read_case
 
@@ -100,6 +100,14 @@ def test_the_shipped_procedural_sets_are_what_the_generator_writes(tmp_path):
     assert written == sorted(p.relative_to(shipped) for p in shipped.rglob('*.*'))
     for relative in written:
       assert (shipped / relative).read_bytes() == (tmp_path / name / relative).read_bytes()
+
+
+def test_the_shipped_everyday_set_is_what_its_model_writes(tmp_path):
+  everyday.write_set(tmp_path)
+  shipped = procedural.OBJECTS / 'everyday'
+  written = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob('*.*'))
+  assert written == sorted(p.relative_to(shipped) for p in shipped.rglob('*.*'))
+  assert all((shipped / r).read_bytes() == (tmp_path / r).read_bytes() for r in written)
 
 
 def test_procedural_objects_are_grasp_sized():
