@@ -103,6 +103,9 @@ VARIANTS = {
     # types (sim/arrangements.py), for packed arrangements unlike the development templates.
     'cut_default': ['--config', 'default'],
     'family_packed': ['--config', 'default', '--set', 'env.packed_share=0.25'],
+    # Issue 81's screen: today's default with the 14 procedural training objects beside the
+    # blocks (the `objects` preset), against `cut_default` at the same seeds.
+    'objects': ['--config', 'objects'],
 }
 # variant -> the variant whose finished run it resumes to more actions. The same as training
 # that long in one go: nothing in the recipe reads the total (constant learning rate, exploration
