@@ -4,9 +4,10 @@ Each shape of the default pool rests alone on the table at a yaw that is not a m
 22.5 degrees, and is grasped at its centre, at its top surface, at every one of the 16 rotations,
 all in one batch of `jax.vmap(env.step)`. Prints JSON: per shape, which rotations lifted it, the
 fraction of rotations that did, and whether any did. A shape that no rotation lifts caps what
-any policy can reach; one that few rotations lift is hard to learn.
+any policy can reach; one that few rotations lift is hard to learn. `--gripper` measures it for
+each named gripper preset (`sim/grippers.py`) in turn.
 
-  python benchmarks/grasp_ceiling.py [--yaw-deg 10]
+  python benchmarks/grasp_ceiling.py [--yaw-deg 10] [--gripper rg2 robotiq_2f85 franka_hand]
 """
 from __future__ import annotations
 
@@ -39,15 +40,22 @@ CENTRE = (0.02, -0.03)
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--yaw-deg', type=float, default=10.0, help='yaw of every shape')
+  parser.add_argument('--gripper', nargs='+', default=['rg2'], help='gripper presets')
   args = parser.parse_args()
   runtime.setup()
-  env = Tabletop(resolve(None).tabletop)
+  out = {g: ceiling(Tabletop(resolve(None, [f'scene.gripper={g}']).tabletop), args.yaw_deg)
+         for g in args.gripper}
+  print(json.dumps(out, indent=1))
+
+
+def ceiling(env: Tabletop, yaw_deg: float) -> dict:
+  """Per shape of the pool, the rotations whose grasp at its centre lifted it."""
   names = list(dict.fromkeys(env.scene.index.slot_shapes))  # each shape of the pool once
   rotations = env.config.env.num_rotations
   layouts, rows = [], []
   for name in names:
     alone = CaseObject(name, (0.5, 0.5, 0.5), (*CENTRE, rest_height(name)),
-                       rest_quat(name, np.deg2rad(args.yaw_deg)), line=0)
+                       rest_quat(name, np.deg2rad(yaw_deg)), line=0)
     layouts += [case_to_layout(Case(name, 'grasp_ceiling', (alone,)), env)] * rotations
     top = float(shapes.shape(name).rest_extent[2])
     rows += [(k, *CENTRE, top) for k in range(rotations)]
@@ -64,13 +72,13 @@ def main():
   per_shape = {name: dict(lifted_at_rotations=np.flatnonzero(success[i]).tolist(),
                           fraction=float(success[i].mean()), any=bool(success[i].any()))
                for i, name in enumerate(names)}
-  print(json.dumps(dict(
-      settings=dict(yaw_deg=args.yaw_deg, centre=CENTRE, rotations=rotations,
-                    batch=len(rows), backend=jax.default_backend(), machine=platform.machine(),
-                    jax=jax.__version__),
+  return dict(
+      settings=dict(yaw_deg=yaw_deg, centre=CENTRE, rotations=rotations, batch=len(rows),
+                    gripper=env.config.scene.gripper.name, backend=jax.default_backend(),
+                    machine=platform.machine(), jax=jax.__version__),
       shapes=per_shape,
       mean_fraction=float(success.mean()),
-      seconds_with_compile=round(seconds, 1)), indent=1))
+      seconds_with_compile=round(seconds, 1))
 
 
 if __name__ == '__main__':

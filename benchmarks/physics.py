@@ -90,10 +90,12 @@ def raw_rows(env: Tabletop, states, actions: Action, repeats: int) -> dict:
   """The same start states and controls stepped by MuJoCo directly, no JAX in between."""
   m, script, b = env.scene.mj_model, env.script, actions.x.shape[0]
   ts = jnp.arange(script.length)
+  scene = env.config.scene
   ctrl = np.asarray(jax.vmap(lambda a: jax.vmap(
-      lambda t: primitives.target(script, a, env.config.env, env.config.scene.workspace_half,
+      lambda t: primitives.target(script, a, env.config.env, scene.gripper, scene.workspace_half,
                                   t))(ts))(actions), np.float64)
-  start = np.asarray(jax.vmap(lambda a: primitives.start_pose(a, env.config.env))(actions))
+  start = np.asarray(jax.vmap(lambda a: primitives.start_pose(a, env.config.env, scene.gripper))(
+      actions))
   qpos = np.asarray(states.sim.qpos, np.float64)
   qpos[:, env.scene.index.gripper_qpos] = start
   threads = default_threads()

@@ -5,6 +5,7 @@ takes a `mvcoba_jax.deploy.Action` in the robot's base frame); `SimulatedRig` is
 standing in for both, so the loop runs end to end here.
 
   python examples/robot_loop.py --model EXPORT_DIR [--actions 10] [--seed 0]
+                                [--gripper NAME [--other-gripper]]
 
 The loop itself needs numpy, OpenCV and onnxruntime only (`mvcoba_jax.deploy`); the simulated rig
 needs JAX and MuJoCo.
@@ -37,7 +38,7 @@ class Rig:
 class SimulatedRig(Rig):
   """The simulator as cameras and robot: a random drop of the policy's training scene."""
 
-  def __init__(self, model: dict, seed: int = 0):
+  def __init__(self, model: dict, seed: int = 0, gripper: str | None = None):
     import jax  # noqa: PLC0415 (the simulator's needs, not the loop's)
     from mvcoba_jax import config as config_lib  # noqa: PLC0415
     from mvcoba_jax.sim import cameras  # noqa: PLC0415
@@ -45,6 +46,8 @@ class SimulatedRig(Rig):
     from mvcoba_jax.sim.tabletop import Tabletop  # noqa: PLC0415
     self.jax, self.cameras, self.sim_action = jax, cameras, SimAction
     config = config_lib.from_dict(model['config'])
+    if gripper is not None:  # the robot's own gripper, which may not be the policy's
+      config = config_lib.override(config, f'scene.gripper={gripper}')
     self.env = Tabletop(config.tabletop)
     self.state = jax.jit(self.env.reset)(jax.random.PRNGKey(seed))
     self.render = jax.jit(lambda s: cameras.render(self.env, s))
@@ -92,7 +95,8 @@ def run(rig: Rig, policy: OnnxPolicy, calibration, actions: int, say=print) -> l
     frame = after
     records.append({'round': i, 'primitive': action.primitive,
                     'position': [round(v, 4) for v in action.position],
-                    'angle': round(action.angle, 4), 'changed': changed})
+                    'angle': round(action.angle, 4), 'opening': round(action.opening, 4),
+                    'changed': changed})
     say(json.dumps(records[-1]))
   return records
 
@@ -105,13 +109,18 @@ def main(argv=None) -> int:
   parser.add_argument('--failed-grasp-retries', type=int,
                       help="grasps again after this many failed grasps in a row before pushing, "
                            "in place of model.json's (a policy with failed_grasp_changes false)")
+  parser.add_argument('--gripper', help="the robot's gripper (a preset of sim/grippers.py): "
+                                         "refused unless it is the policy's")
+  parser.add_argument('--other-gripper', action='store_true',
+                      help='act with a gripper other than the one the policy trained with')
   args = parser.parse_args(argv)
   if args.actions < 1 or args.seed < 0:
     parser.error(f'--actions {args.actions} --seed {args.seed}: at least 1 action, a seed of 0 '
                  'or more')
   try:
-    policy = OnnxPolicy(args.model, failed_grasp_retries=args.failed_grasp_retries)
-    rig = SimulatedRig(policy.model, args.seed)
+    policy = OnnxPolicy(args.model, failed_grasp_retries=args.failed_grasp_retries,
+                        gripper=args.gripper, other_gripper=args.other_gripper)
+    rig = SimulatedRig(policy.model, args.seed, args.gripper)
     run(rig, policy, calibration_from_dict(rig.calibration), args.actions)
   except DeployError as e:
     print(f'error: {e}', file=sys.stderr)

@@ -112,7 +112,7 @@ def describe(config: Config, method: methods.Method, params: dict[str, np.ndarra
       'figures': measured or {},
       'method': config.network.method,
       'network': dataclasses.asdict(config.network),
-      'config': config_lib.to_dict(config),
+      'config': json.loads(json.dumps(config_lib.to_dict(config))),  # as the file holds it
       'objects': {'trained_on': shapes.pool_record(config.scene.pool),
                   'meaning': 'the object slots of training\'s scene: the VPG blocks by name, '
                              'mesh objects by path and the SHA-256 of their files'},
@@ -189,7 +189,8 @@ def model_file_of(config: Config, method: methods.Method) -> model_file.ModelFil
       onnx_file='model.onnx', change_min=p.change_min, change_max=p.change_max,
       change_area=p.change_area, failed_grasp_changes=p.failed_grasp_changes,
       failed_grasp_retries=p.failed_grasp_retries,
-      fill_unseen=p.fill_unseen, push_length_m=config.env.push_length)
+      fill_unseen=p.fill_unseen, push_length_m=config.env.push_length,
+      gripper=json.loads(json.dumps(dataclasses.asdict(config.scene.gripper))))
 
 
 def _merged(described: dict, fields: dict) -> dict:

@@ -13,7 +13,6 @@ from mvcoba_jax.sim import cameras
 from mvcoba_jax.sim.geometry import pixel_to_world, rotation_angle
 from mvcoba_jax.sim.primitives import GRASP
 from mvcoba_jax.sim.push import push_length
-from mvcoba_jax.sim.scene import MAX_OPENING
 
 # Action markers (BGR): a push, a grasp that lifted an object, a grasp that did not.
 PUSH_COLOR, GRASP_OK_COLOR, GRASP_FAILED_COLOR = (255, 160, 0), (0, 200, 0), (0, 0, 230)
@@ -71,7 +70,7 @@ def run_strip(trace, run: int, task: Task, scale: int = 3) -> np.ndarray:
   as a bar across the fingers' closing line (green if it lifted an object, red if not)."""
   cell, env = task.perception.heightmap_resolution, task.env.config.env
   border = task.env.config.scene.workspace_half
-  finger_span = MAX_OPENING / cell * scale
+  finger_span = task.env.config.scene.gripper.max_opening / cell * scale
   frames = []
   for t in np.flatnonzero(np.asarray(trace.active[run])):
     views = [cv2.resize(np.ascontiguousarray(v[..., ::-1]), None, fx=scale, fy=scale,

@@ -11,13 +11,15 @@ from mvcoba_jax.config.saved import (LEGACY, RETIRED, RUNTIME_FIELDS, defaulted,
 from mvcoba_jax.config.schema import (ACTIVATION_LIMIT_BYTES, DENSENET_GROWTH, FUTURE_MAX,
                                       MAX_ACTIONS_LIMIT, PHASE_LIMIT_S, REPLAY_LIMIT_BYTES,
                                       TARGETS, TRUNKS, Between, CameraConfig, Config,
-                                      ConfigError, EnvConfig, Error, NetworkConfig,
+                                      ConfigError, EnvConfig, Error, GripperConfig,
+                                      NetworkConfig,
                                       PerceptionConfig, SceneConfig, TabletopConfig,
                                       TrainConfig, check)
 from mvcoba_jax.config.validation import validate
 
 __all__ = ['ACTING_RULE', 'ACTIVATION_LIMIT_BYTES', 'Between', 'CameraConfig', 'Config',
            'ConfigError', 'DENSENET_GROWTH', 'EnvConfig', 'Error', 'FIXED_BY_TRAINING',
+           'GripperConfig',
            'FUTURE_MAX', 'LEGACY', 'MAX_ACTIONS_LIMIT', 'NetworkConfig', 'PHASE_LIMIT_S', 'PRESETS',
            'PerceptionConfig', 'REPLAY_LIMIT_BYTES', 'RETIRED', 'RUNTIME_FIELDS', 'SceneConfig',
            'TARGETS', 'TRUNKS', 'TabletopConfig', 'TrainConfig', 'add_arguments', 'check',

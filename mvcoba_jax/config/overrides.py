@@ -8,7 +8,8 @@ import re
 import typing
 
 from mvcoba_jax import methods
-from mvcoba_jax.config.schema import Config, ConfigError
+from mvcoba_jax.sim import grippers
+from mvcoba_jax.config.schema import Config, ConfigError, GripperConfig
 from mvcoba_jax.config.validation import validate
 
 
@@ -77,6 +78,8 @@ def override(config, assignment: str):
         raise ConfigError(f'unknown config key {key!r}: {names[0]!r} has no sub-fields')
       return dataclasses.replace(node, **{names[0]: apply(value, names[1:])})
     hints = typing.get_type_hints(type(node))
+    if isinstance(value, GripperConfig):  # a gripper by its preset's name
+      return dataclasses.replace(node, **{names[0]: grippers.preset(text.strip())})
     if dataclasses.is_dataclass(value):
       raise ConfigError(f'config key {key!r} is a group; set one of its fields')
     return dataclasses.replace(node, **{names[0]: _parse(text.strip(), hints[names[0]], key)})

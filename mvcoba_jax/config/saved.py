@@ -11,8 +11,10 @@ from mvcoba_jax.config.schema import (
   Config,
   ConfigError,
   EnvConfig,
+  GripperConfig,
   NetworkConfig,
   PerceptionConfig,
+  SceneConfig,
   TrainConfig,
 )
 from mvcoba_jax.config.validation import validate
@@ -39,6 +41,10 @@ def from_dict(data: dict, cls=Config, where: str = 'config'):
     raise ConfigError(f'{where}: expected an object of {cls.__name__} fields, got {data!r:.60}')
   fields = {f.name for f in dataclasses.fields(cls)}
   data = {**LEGACY.get(cls, {}), **{k: v for k, v in data.items() if k not in RETIRED.get(cls, ())}}
+  for old, (group, field) in MOVED.get(cls, {}).items():
+    if old in data:
+      data = {**data, group: {**data[group], field: data[old]}}
+      del data[old]
   unknown = sorted(set(data) - fields)
   if unknown:
     raise ConfigError(f'{where}: unknown keys {", ".join(unknown)} for {cls.__name__}')
@@ -51,6 +57,10 @@ def from_dict(data: dict, cls=Config, where: str = 'config'):
 # failure limit became `env.max_failures`, shared with evaluation (its default, 5, is the paper's).
 RETIRED = {TrainConfig: ('max_consecutive_failures',)}
 
+# Fields that moved into a group, with the group's field that holds them now: a saved config's
+# value is kept there. The scene's finger friction is the gripper's.
+MOVED = {SceneConfig: {'finger_friction': ('gripper', 'finger_friction')}}
+
 # Fields added after runs were saved without them, with the value those runs used (which is not
 # the current default): a saved config that lacks them gets that value, without a warning.
 LEGACY = {TrainConfig: {'target': 'network', 'failed_grasp_reward': 0.5,
@@ -62,7 +72,8 @@ LEGACY = {TrainConfig: {'target': 'network', 'failed_grasp_reward': 0.5,
           NetworkConfig: {'pad_to_diagonal': False, 'shared_stages': 0, 'suppress': False,
                           'push_room': 0.0},
           PerceptionConfig: {'failed_grasp_changes': True, 'fill_unseen': False,
-                             'failed_grasp_retries': 0}}
+                             'failed_grasp_retries': 0},
+          SceneConfig: {'gripper': dataclasses.asdict(GripperConfig())}}
 
 # Fields that choose where a run computes, not what it computes: a saved config that lacks them
 # (written before they existed) runs on this machine's choice without a warning.

@@ -11,13 +11,14 @@ from mvcoba_jax.sim.config import (
   ConfigError,
   EnvConfig,
   Error,
+  GripperConfig,
   SceneConfig,
   TabletopConfig,
   check,
 )
 
-__all__ = ['CameraConfig', 'Config', 'ConfigError', 'EnvConfig', 'Error', 'NetworkConfig',
-           'PerceptionConfig', 'SceneConfig', 'TabletopConfig', 'TrainConfig']
+__all__ = ['CameraConfig', 'Config', 'ConfigError', 'EnvConfig', 'Error', 'GripperConfig',
+           'NetworkConfig', 'PerceptionConfig', 'SceneConfig', 'TabletopConfig', 'TrainConfig']
 
 
 TRUNKS = ('small', 'densenet121')

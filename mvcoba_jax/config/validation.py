@@ -3,6 +3,7 @@ config (a preset, overrides, a saved config.json) ends with."""
 from __future__ import annotations
 
 from mvcoba_jax import methods
+from mvcoba_jax.sim import shapes
 from mvcoba_jax.config.schema import (ACTIVATION_LIMIT_BYTES, DENSENET_GROWTH, PHASE_LIMIT_S,
                                       REPLAY_LIMIT_BYTES, Config, ConfigError)
 
@@ -34,6 +35,10 @@ def _parts_fit(config: Config) -> None:
         f'perception.heightmap_resolution={config.perception.heightmap_resolution!r} must tile '
         f'the workspace (2 x scene.workspace_half = {2 * scene.workspace_half:g} m) in a whole '
         f'number of cells between 8 and 4096; it gives {cells:g}')
+  if env.grasp_depth >= scene.gripper.finger_length:
+    raise ConfigError(f'env.grasp_depth={env.grasp_depth!r} must be below '
+                      f'scene.gripper.finger_length={scene.gripper.finger_length!r}: the palm '
+                      'would press on what the fingers reach for')
   if config.perception.change_min >= config.perception.change_max:
     raise ConfigError(f'perception.change_min={config.perception.change_min!r} must be below '
                       f'perception.change_max={config.perception.change_max!r}')
@@ -57,14 +62,8 @@ def _parts_fit(config: Config) -> None:
     if seconds > PHASE_LIMIT_S:
       raise ConfigError(f'{name} = {seconds:.3g} s of simulated motion; at most '
                         f'{PHASE_LIMIT_S:g} s per phase of a primitive or a reset')
-  if scene.backend in ('mjx', 'warp') and (
-      scene.max_contact_points < CONTACTS_PER_OBJECT * env.num_objects
-      or scene.max_geom_pairs < env.num_objects):
-    raise ConfigError(
-        f'scene.max_contact_points={scene.max_contact_points} and scene.max_geom_pairs='
-        f'{scene.max_geom_pairs} on the {scene.backend} backend: a settled drop of '
-        f'env.num_objects={env.num_objects} needs at least {CONTACTS_PER_OBJECT} contact points '
-        'and one geom pair per object on the table, or objects fall through it')
+  if scene.backend in ('mjx', 'warp'):
+    _contact_caps_fit(scene, env)
   if train.grasp_symmetry and env.num_rotations % 2:
     raise ConfigError(f'train.grasp_symmetry needs an even env.num_rotations (the grasp turned '
                       f'half way); it is {env.num_rotations}')
@@ -81,6 +80,25 @@ def _parts_fit(config: Config) -> None:
   if any(w % net.groups for w in widths):
     raise ConfigError(f'network.groups={net.groups} must divide every channel count of the '
                       f'{net.trunk} trunk ({", ".join(map(str, widths))}: network.features)')
+
+
+def _contact_caps_fit(scene, env) -> None:
+  """MJX and Warp keep at most `max_geom_pairs` pairs and `max_contact_points` points a step and
+  drop the rest: a settled drop needs a pair for each of its objects' convex parts on the table
+  (the `num_objects` with the most parts) and CONTACTS_PER_OBJECT points an object."""
+  parts = sorted(((len(shapes.shape(name).parts), name) for name, count in scene.pool
+                  for _ in range(count)), reverse=True)[:env.num_objects]
+  pairs = sum(n for n, _ in parts)
+  if scene.max_contact_points < CONTACTS_PER_OBJECT * env.num_objects or (
+      scene.max_geom_pairs < pairs):
+    most, name = parts[0]
+    raise ConfigError(
+        f'scene.max_contact_points={scene.max_contact_points} and scene.max_geom_pairs='
+        f'{scene.max_geom_pairs} on the {scene.backend} backend: a settled drop of '
+        f'env.num_objects={env.num_objects} needs at least '
+        f'{CONTACTS_PER_OBJECT * env.num_objects} contact points and a geom pair for each of '
+        f'its objects\' {pairs} convex parts on the table ({name}: {most} parts), or objects '
+        'fall through it')
 
 
 def _method_fits(config: Config) -> None:

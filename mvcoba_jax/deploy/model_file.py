@@ -43,6 +43,7 @@ class ModelFile:
   failed_grasp_retries: int  # ... past this many such grasps in a row
   fill_unseen: bool  # each view's unseen cells filled from the others first
   push_length_m: float  # how far a push slides along its angle, as in training
+  gripper: dict  # the gripper it trained with (config.scene.gripper): name, fingers, opening
   raw: dict | None = dataclasses.field(default=None, compare=False)  # the whole file as read
 
 
@@ -68,9 +69,16 @@ FIELDS = {
     'failed_grasp_retries': ('config.perception.failed_grasp_retries', int, (0, 100)),
     'fill_unseen': ('config.perception.fill_unseen', bool, None),
     'push_length_m': ('config.env.push_length', float, (0.001, 1.0)),
+    'gripper': ('config.scene.gripper', dict, None),
 }
+# The RG2-like gripper of every export written before the gripper was a config of its own
+# (`sim.config.GripperConfig`'s defaults; tests/unit/test_policy_files.py holds them equal).
+RG2 = {'name': 'rg2', 'finger_width': 0.02, 'finger_thickness': 0.01, 'finger_length': 0.06,
+       'max_opening': 0.11, 'palm': [0.03, 0.15, 0.02], 'finger_force': 15.0,
+       'finger_friction': 1.5}
 ABSENT = {'height_unit_m': HEIGHT_UNIT, 'below_table_m': BELOW_TABLE,
-          'failed_grasp_changes': True, 'failed_grasp_retries': 0, 'fill_unseen': False}
+          'failed_grasp_changes': True, 'failed_grasp_retries': 0, 'fill_unseen': False,
+          'gripper': RG2}
 _REQUIRED = object()  # a field without a value in ABSENT
 
 
@@ -123,6 +131,11 @@ def read(folder) -> ModelFile:
     if abs(got[name] - own) > 1e-12:
       raise DeployError(f'{path}: {FIELDS[name][0]} {got[name]!r}: this runtime\'s heightmaps '
                         f'use {own!r} (another version of mvcoba_jax wrote it)')
+  gripper = got['gripper']
+  if not isinstance(gripper.get('name'), str) or not (
+      _real(gripper.get('max_opening')) and 0 < gripper['max_opening'] <= 1):
+    raise DeployError(f'{path}: config.scene.gripper: a name and a max_opening in metres '
+                      'expected')
   if (folder / got['onnx_file']).resolve().parent != folder.resolve():
     raise DeployError(f'{path}: onnx.file {got["onnx_file"]!r} lies outside the export\'s folder')
   if abs(field.get('config.perception.heightmap_resolution', float, (1e-4, 0.05)) - res) > 1e-12:

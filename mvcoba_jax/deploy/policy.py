@@ -23,20 +23,41 @@ class Action:
   angle: float  # base frame: the gripper's yaw and the push direction about +z
   push_length: float  # m a push slides along `angle`: config.env.push_length, cut short at the
   # workspace's edge (`sim.push.push_length`); 0 for a grasp
+  opening: float  # m to open the fingers to before a grasp (the gripper's max_opening); 0 for
+  # a push, which goes closed
   rotation: int
   row: int
   col: int
   q: float
 
 
+def check_gripper(trained: dict, robot: str | dict, folder) -> None:
+  """DeployError unless the robot's gripper (a name, or the fields of one) is the one the policy
+  trained with: same name, and where fields are given, the same values (1e-6 m)."""
+  name = robot if isinstance(robot, str) else robot.get('name')
+  differs = [k for k, v in ({} if isinstance(robot, str) else robot).items()
+             if k != 'name' and k in trained and not np.allclose(v, trained[k], atol=1e-6)]
+  if name != trained['name'] or differs:
+    what = f'{name!r}' + (f' ({", ".join(f"{k} {robot[k]!r}" for k in differs)})'
+                          if differs else '')
+    raise DeployError(f'{folder}: the policy trained with gripper {trained["name"]!r} (opening '
+                      f'{trained["max_opening"]:g} m), the robot has {what}; retrain for it '
+                      '(docs/gripper.md), or act anyway with other_gripper=True '
+                      '(--other-gripper)')
+
+
 class OnnxPolicy:
   """model.json and model.onnx of an export: the graph's greedy action on a state, given whether
   the last action changed the scene, as `examples/onnx_infer.py` runs it. `failed_grasp_changes`
   and `failed_grasp_retries`, when given, replace model.json's change rule after a failed grasp
-  (`model_file.acting_rule`: what the rule does next, not what the network reads)."""
+  (`model_file.acting_rule`: what the rule does next, not what the network reads). `gripper`,
+  the robot's (a preset's name, or its fields as `scene.gripper` holds them), is refused unless
+  it is the one the policy trained with (`gripper` property), or `other_gripper` says to act
+  anyway: grasps are learned for one pair of fingers."""
 
   def __init__(self, folder, failed_grasp_changes: bool | None = None,
-               failed_grasp_retries: int | None = None):
+               failed_grasp_retries: int | None = None, gripper: str | dict | None = None,
+               other_gripper: bool = False):
     import onnxruntime as ort  # noqa: PLC0415 (only a policy needs it, not the heightmaps)
     self.folder = folder = pathlib.Path(folder)
     # refuses a damaged, unknown or hand-broken model.json, or a rule that cannot be
@@ -47,6 +68,8 @@ class OnnxPolicy:
                         'leaves the action rule to the runtime; export it again '
                         f'(mvcoba-export --checkpoint {folder} --out NEW_FOLDER)')
     self.model = self.spec.raw
+    if gripper is not None and not other_gripper:
+      check_gripper(self.gripper, gripper, folder)
     onnx_file = folder / self.spec.onnx_file
     options = ort.SessionOptions()
     options.log_severity_level = 3  # the converter's loose shape annotations only warn
@@ -55,6 +78,11 @@ class OnnxPolicy:
                                           providers=['CPUExecutionProvider'])
     except Exception as e:  # noqa: BLE001 (onnxruntime raises its own kinds)
       raise DeployError(f'{onnx_file}: cannot load the network ({str(e)[:160]})') from None
+
+  @property
+  def gripper(self) -> dict:
+    """The gripper the policy trained with, as model.json's config.scene.gripper holds it."""
+    return self.spec.gripper
 
   def check(self, calibration: Calibration) -> None:
     """Refuses a calibration whose workspace grid or number of cameras is not the policy's."""
@@ -120,6 +148,7 @@ class OnnxPolicy:
     return Action(primitive='grasp' if grasp else 'push',
                   position=tuple(float(v) for v in calibration.workspace_to_base((x, y, z))),
                   angle=math.remainder(angle, 2 * math.pi), push_length=push,
+                  opening=float(self.gripper['max_opening']) if grasp else 0.0,
                   rotation=rotation, row=row, col=col, q=score)
 
   def changed(self, before, after, grasped: bool | None = None, failed_grasps: int = 0) -> bool:

@@ -42,7 +42,7 @@ def rule_maps(q, depth, method: Method, config: Config):
   return suppression.scores(q, surface_height(depth, method.views),
                             config.perception.heightmap_resolution,
                             per_primitive=not method.rule.compares_primitives,
-                            push_room=config.network.push_room)
+                            push_room=config.network.push_room, gripper=config.scene.gripper)
 
 
 def greedy_actions(q, changed, method: Method) -> PixelAction:

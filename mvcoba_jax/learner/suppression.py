@@ -21,14 +21,21 @@ import jax.numpy as jnp
 
 from mvcoba_jax.learner.networks import NO_ACTION
 from mvcoba_jax.sim.geometry import rotate_images, rotation_angle
-from mvcoba_jax.sim.scene import FINGER_HALF, MAX_OPENING
+from mvcoba_jax.sim.config import GripperConfig
 
 OBJECT_HEIGHT = 0.013  # m: a cell holds an object above this (CPG: 0.618 - 0.605 m)
 PUSH_RING = (0.0105, 0.0245)  # m from an object's edge (CPG: 7 and 15 px dilations at 3.5 mm)
 PUSH_AHEAD = (0.0385, 0.070, 0.014)  # m: strip ahead of a push, from, to, half width (11-20 px)
-# Where this gripper's open fingers land: from 5 mm inside the opening to the outer face, and
-# 5 mm beyond the fingers' width either side (CPG: 10-16 px, +-6 px, its Robotiq's).
-FINGER_ZONE = (MAX_OPENING / 2 - 0.005, MAX_OPENING / 2 + 2 * FINGER_HALF[1], FINGER_HALF[0] + 0.005)
+ZONE_MARGIN = 0.005  # m the landing zones reach beyond the fingers, inward and to either side
+
+
+def finger_zone(gripper: GripperConfig) -> tuple[float, float, float]:
+  """Where the gripper's open fingers land, m from the grasp's centre along the closing line:
+  from ZONE_MARGIN inside the opening to the fingers' outer faces, and ZONE_MARGIN beyond the
+  fingers' width either side (CPG: 10-16 px, +-6 px, for its Robotiq's)."""
+  half = gripper.max_opening / 2
+  return (half - ZONE_MARGIN, half + gripper.finger_thickness,
+          gripper.finger_width / 2 + ZONE_MARGIN)
 Q_OFFSET = 0.1  # CPG adds it to the predictions before weighting
 
 
@@ -54,7 +61,8 @@ def _dilate(x, radius: int):
   return jax.lax.reduce_window(x, -jnp.inf, jax.lax.max, (1, size, size), (1, 1, 1), 'SAME')
 
 
-def factors(height, num_rotations: int, resolution: float, push_room: float = 0.0):
+def factors(height, num_rotations: int, resolution: float, push_room: float = 0.0,
+            gripper: GripperConfig = GripperConfig()):
   """(B, 2, K, R, R) factors in [0, 1] (PUSH, GRASP) of every rotation and cell, from the
   surface height (B, R, R) the method sees; 0 suppresses. With `push_room` (m), also every push
   whose start has less room than that to the workspace's border along its direction."""
@@ -66,8 +74,9 @@ def factors(height, num_rotations: int, resolution: float, push_room: float = 0.
   ahead = (_cells(PUSH_AHEAD[0], resolution), _cells(PUSH_AHEAD[1], resolution))
   across = _cells(PUSH_AHEAD[2], resolution)
   push = _box_share(turned, (-across, across), ahead)
-  inner, outer = _cells(FINGER_ZONE[0], resolution), _cells(FINGER_ZONE[1], resolution)
-  width = _cells(FINGER_ZONE[2], resolution)
+  zone = finger_zone(gripper)
+  inner, outer = _cells(zone[0], resolution), _cells(zone[1], resolution)
+  width = _cells(zone[2], resolution)
   fingers = jnp.maximum(_box_share(turned, (inner, outer), (-width, width)),
                         _box_share(turned, (-outer, -inner), (-width, width)))
   maps = jnp.stack([push, 1.0 - fingers], axis=-1)  # (B*K, R, R, 2)
@@ -97,13 +106,14 @@ def room_ahead(side: int, num_rotations: int, resolution: float):
   return jnp.minimum(along(x, jnp.cos(angle)), along(y, jnp.sin(angle)))
 
 
-def scores(q, height, resolution: float, per_primitive: bool = False, push_room: float = 0.0):
+def scores(q, height, resolution: float, per_primitive: bool = False, push_room: float = 0.0,
+           gripper: GripperConfig = GripperConfig()):
   """The maps CPG's rule compares: (Q + 0.1) x factor where the factor allows, NO_ACTION where
   it suppresses; for a state with no allowed action at all, its raw Q maps (with
   `per_primitive`, for a rule that is given its primitive: a primitive with no allowed action
   keeps its raw Q map). `q` (B, 2, K, R, R) holds every rotation in order; `push_room`:
   `factors`'."""
-  f = factors(height, q.shape[2], resolution, push_room)
+  f = factors(height, q.shape[2], resolution, push_room, gripper)
   allowed = f > 0
   weighted = jnp.where(allowed, (q + Q_OFFSET) * f, NO_ACTION)
   anything = jnp.any(allowed, axis=(2, 3, 4) if per_primitive else (1, 2, 3, 4), keepdims=True)

@@ -117,6 +117,33 @@ class CameraConfig:
 
 
 @dataclasses.dataclass(frozen=True)
+class GripperConfig:
+  """The two-finger parallel gripper, as one description that the scene, the primitives, the
+  grasp-success rule, CPG's landing zones and the pictures read. Each finger is a box: `width`
+  across the closing direction, `thickness` along it, `length` below the palm. The defaults are
+  the RG2-like gripper every landed figure used; `sim/grippers.py` holds the presets and the
+  sources of their numbers."""
+  name: str = 'rg2'
+  finger_width: float = 0.02
+  finger_thickness: float = 0.01
+  finger_length: float = 0.06
+  max_opening: float = 0.11  # gap between the open fingers (m)
+  palm: tuple[float, float, float] = (0.03, 0.15, 0.02)  # full size (m), y along the closing
+  finger_force: float = 15.0  # N: each finger's drive, at most
+  finger_friction: float = 1.5
+
+  def __post_init__(self):
+    check(self, 'scene.gripper.', {
+        'finger_width': Between(0.002, 0.1), 'finger_thickness': Between(0.001, 0.05),
+        'finger_length': Between(0.01, 0.2), 'max_opening': Between(0.01, 0.3),
+        'palm': Between(0.001, 0.5), 'finger_force': Between(0, 1000, low_open=True),
+        'finger_friction': Between(0, 10, low_open=True)})
+    if self.max_opening <= 2 * self.finger_thickness:
+      raise ConfigError(f'scene.gripper.max_opening={self.max_opening!r} must exceed twice '
+                        f'scene.gripper.finger_thickness ({2 * self.finger_thickness:g})')
+
+
+@dataclasses.dataclass(frozen=True)
 class SceneConfig:
   """What goes into the compiled MuJoCo model, and which engine steps it."""
   # 'native': MuJoCo's C engine and mj_ray on CPU threads; 'mjx': MJX's JAX implementation,
@@ -140,7 +167,7 @@ class SceneConfig:
   # them with no push (benchmarks/ordered_graspability.py).
   contact_timeconst: float = 0.008
   friction: float = 1.0
-  finger_friction: float = 1.5
+  gripper: GripperConfig = GripperConfig()
   # The most the gripper's vertical drive presses down (N), as a real arm's force limit would:
   # fingers that land on a neighbouring block stop on its top instead of sinking millimetres
   # into it and prying packed blocks apart (benchmarks/ordered_graspability.py).
@@ -164,7 +191,7 @@ class SceneConfig:
         'workspace_top': Between(0.05, 2.0), 'timestep': Between(0.0001, 0.02),
         'iterations': Between(1, 1000), 'ls_iterations': Between(1, 1000),
         'contact_timeconst': Between(0, 1, low_open=True),
-        'friction': Between(0, 10, low_open=True), 'finger_friction': Between(0, 10, low_open=True),
+        'friction': Between(0, 10, low_open=True),
         'press_force': Between(0, 60, low_open=True),
         'object_density': Between(1, 100000), 'max_geom_pairs': Between(1, 100000),
         'max_contact_points': Between(1, 1000000), 'occluders': Between(0, 1, low_open=True)})

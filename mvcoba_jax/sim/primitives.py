@@ -12,13 +12,11 @@ import math
 import jax.numpy as jnp
 from flax import struct
 
-from mvcoba_jax.sim.config import EnvConfig
+from mvcoba_jax.sim.config import EnvConfig, GripperConfig
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.sim.push import push_length
-from mvcoba_jax.sim.scene import MAX_OPENING
 
 PUSH, GRASP = 0, 1
-FINGER_OPEN = MAX_OPENING / 2
 FINGER_SQUEEZE = -0.01  # target past closed: the fingers keep squeezing what they hold
 
 
@@ -75,15 +73,21 @@ def tip_heights(action: Action, env: EnvConfig):
   return start, work
 
 
-def start_pose(action: Action, env: EnvConfig):
+def finger_open(gripper: GripperConfig) -> float:
+  """Each finger's joint position with the gripper open: half the opening."""
+  return gripper.max_opening / 2
+
+
+def start_pose(action: Action, env: EnvConfig, gripper: GripperConfig):
   """Gripper joint positions the primitive starts from (the gripper is placed there)."""
   start, _ = tip_heights(action, env)
   yaw = rotation_angle(action.rotation, env.num_rotations)
-  finger = jnp.where(action.primitive == GRASP, FINGER_OPEN, 0.0)
+  finger = jnp.where(action.primitive == GRASP, finger_open(gripper), 0.0)
   return jnp.stack([action.x, action.y, start, yaw, finger, finger])
 
 
-def target(script: Script, action: Action, env: EnvConfig, half: float, t):
+def target(script: Script, action: Action, env: EnvConfig, gripper: GripperConfig, half: float,
+           t):
   """Actuator targets at physics step t of the primitive; a push stops at the workspace's edge
   (+-`half`), as the robot's does (`sim.push.push_length`)."""
   start, work = tip_heights(action, env)
@@ -95,7 +99,8 @@ def target(script: Script, action: Action, env: EnvConfig, half: float, t):
   # The fingers close at a bounded speed: a fast close tunnels through corners.
   lift = ramp(script.descend + script.close, script.lift) * env.lift_height
   grasp_z = descend + lift
-  grasp_finger = FINGER_OPEN + (FINGER_SQUEEZE - FINGER_OPEN) * ramp(script.descend, script.close)
+  open_ = finger_open(gripper)
+  grasp_finger = open_ + (FINGER_SQUEEZE - open_) * ramp(script.descend, script.close)
 
   # Push: descend closed, slide along the rotation's direction.
   reach = push_length((action.x, action.y), yaw, env.push_length, half, xp=jnp)

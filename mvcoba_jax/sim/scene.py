@@ -16,9 +16,6 @@ import numpy as np
 from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.config import CameraConfig, SceneConfig
 
-FINGER_HALF = (0.01, 0.005, 0.03)  # 2 cm wide, 1 cm thick, 6 cm long
-MAX_OPENING = 0.11  # gap between the open fingers
-PALM_HALF = (0.015, 0.075, 0.01)
 PARK_HEIGHT = 2.0  # objects out of play wait here, far above the cameras' view
 GRIPPER_PARK = (0.0, 0.0, 1.0)
 GRIPPER_GROUP = 3  # geom group of palm and fingers: the cameras leave it out
@@ -78,8 +75,12 @@ def build_mjcf(scene: SceneConfig) -> str:
       f'<geom name="occluder{i}" type="box" size="{_fmt(h)}" contype="0" conaffinity="0" '
       f'rgba="0.35 0.35 0.35 1"/></body>' for i, h in enumerate(scene.occluders))
 
-  fx, fy, fz = FINGER_HALF
-  finger_friction = f'{scene.finger_friction:.6g} 0.005 0.0001'
+  gripper = scene.gripper
+  fx, fy, fz = (0.5 * gripper.finger_width, 0.5 * gripper.finger_thickness,
+                0.5 * gripper.finger_length)
+  palm = tuple(0.5 * v for v in gripper.palm)
+  finger_friction = f'{gripper.finger_friction:.6g} 0.005 0.0001'
+  force = f'{-gripper.finger_force:.6g} {gripper.finger_force:.6g}'
   return f"""<mujoco model="mvcoba_tabletop">
   <compiler angle="radian" autolimits="true"/>
   <option timestep="{scene.timestep:.6g}" iterations="{scene.iterations}"
@@ -107,18 +108,20 @@ def build_mjcf(scene: SceneConfig) -> str:
       <joint name="grip_y" type="slide" axis="0 1 0" armature="0.1"/>
       <joint name="grip_z" type="slide" axis="0 0 1" armature="0.1"/>
       <joint name="grip_yaw" type="hinge" axis="0 0 1" armature="0.01"/>
-      <geom name="palm" type="box" pos="0 0 {2 * fz + PALM_HALF[2]:.6g}" size="{_fmt(PALM_HALF)}"
+      <geom name="palm" type="box" pos="0 0 {2 * fz + palm[2]:.6g}" size="{_fmt(palm)}"
             contype="8" mass="0.4" group="{GRIPPER_GROUP}"/>
       <body name="finger_left" gravcomp="1">
-        <joint name="finger_left" type="slide" axis="0 1 0" range="0 {MAX_OPENING / 2:.6g}"
+        <joint name="finger_left" type="slide" axis="0 1 0"
+               range="0 {gripper.max_opening / 2:.6g}"
                armature="0.01"/>
-        <geom name="finger_left" type="box" pos="0 {fy:.6g} {fz:.6g}" size="{fx} {fy} {fz}"
+        <geom name="finger_left" type="box" pos="0 {fy:.6g} {fz:.6g}" size="{_fmt((fx, fy, fz))}"
               contype="4" mass="0.05" friction="{finger_friction}" group="{GRIPPER_GROUP}"/>
       </body>
       <body name="finger_right" gravcomp="1">
-        <joint name="finger_right" type="slide" axis="0 -1 0" range="0 {MAX_OPENING / 2:.6g}"
+        <joint name="finger_right" type="slide" axis="0 -1 0"
+               range="0 {gripper.max_opening / 2:.6g}"
                armature="0.01"/>
-        <geom name="finger_right" type="box" pos="0 {-fy:.6g} {fz:.6g}" size="{fx} {fy} {fz}"
+        <geom name="finger_right" type="box" pos="0 {-fy:.6g} {fz:.6g}" size="{_fmt((fx, fy, fz))}"
               contype="4" mass="0.05" friction="{finger_friction}" group="{GRIPPER_GROUP}"/>
       </body>
     </body>
@@ -131,8 +134,8 @@ def build_mjcf(scene: SceneConfig) -> str:
     <position name="grip_z" joint="grip_z" kp="3000" kv="150"
               forcerange="{-scene.press_force:.6g} 60"/>
     <position name="grip_yaw" joint="grip_yaw" kp="30" kv="2" forcerange="-5 5"/>
-    <position name="finger_left" joint="finger_left" kp="400" kv="10" forcerange="-15 15"/>
-    <position name="finger_right" joint="finger_right" kp="400" kv="10" forcerange="-15 15"/>
+    <position name="finger_left" joint="finger_left" kp="400" kv="10" forcerange="{force}"/>
+    <position name="finger_right" joint="finger_right" kp="400" kv="10" forcerange="{force}"/>
   </actuator>
 </mujoco>
 """

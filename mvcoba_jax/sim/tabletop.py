@@ -23,6 +23,9 @@ PLACEMENT_TRIES = 16  # candidate spots per object and drop layer
 PLACEMENT_GAP = 0.004  # clearance between footprint circles of objects dropped in one layer
 PACKED_BANK = 256  # packed arrangements a scene's `env.packed_share` drops draw from
 PACKED_SEED = 90_000  # their draws: apart from validation's and the sealed suites' (generate.py)
+# A grasp holds something when its fingers stop this share of the opening apart (3 mm of the
+# RG2's 11 cm): a grasp that held nothing closes them fully.
+HELD_SHARE = 0.003 / 0.11
 
 
 def packed_bank(slot_shapes: tuple[str, ...], limit: int, size: int = PACKED_BANK,
@@ -136,8 +139,8 @@ class Tabletop:
     self._grip_qpos = jnp.asarray(idx.gripper_qpos)
     self._grip_qvel = jnp.asarray(idx.gripper_qvel)
     self._park_qpos = self._parking.park_qpos
-    self._gripper_park = jnp.array(GRIPPER_PARK + (0.0, primitives.FINGER_OPEN,
-                                                   primitives.FINGER_OPEN), jnp.float32)
+    opened = primitives.finger_open(config.scene.gripper)
+    self._gripper_park = jnp.array(GRIPPER_PARK + (0.0, opened, opened), jnp.float32)
     slot_shapes = [shapes.shape(s) for s in idx.slot_shapes]
     self._rest_quat = jnp.asarray([s.rest_quat for s in slot_shapes], jnp.float32)
     self._rest_half_height = jnp.asarray([0.5 * s.rest_extent[2] for s in slot_shapes],
@@ -354,9 +357,10 @@ class Tabletop:
 
   def _begin(self, state: EnvState, action: Action):
     """The gripper at the primitive's start pose, and its actuator targets (T, 6)."""
-    env, half = self.config.env, self.config.scene.workspace_half
-    sim = self._place_gripper(state.sim, primitives.start_pose(action, env))
-    ctrl = jax.vmap(lambda t: primitives.target(self.script, action, env, half, t))(
+    env, scene = self.config.env, self.config.scene
+    sim = self._place_gripper(state.sim, primitives.start_pose(action, env, scene.gripper))
+    ctrl = jax.vmap(lambda t: primitives.target(self.script, action, env, scene.gripper,
+                                                scene.workspace_half, t))(
         jnp.arange(self.script.length))
     return sim, ctrl
 
@@ -367,7 +371,8 @@ class Tabletop:
     z_before = before.qpos[self._qpos_idx[:, 2]]
     z_after = sim.qpos[self._qpos_idx[:, 2]]
     fingers = sim.qpos[self._grip_qpos[4:]]
-    holding = jnp.sum(fingers) > 0.003  # fingers stopped on something: not closed fully
+    # Fingers stopped on something, not closed fully: apart by a share of the opening.
+    holding = jnp.sum(fingers) > HELD_SHARE * self.config.scene.gripper.max_opening
     risen = state.in_play & (z_after - z_before > 0.5 * env.lift_height)
     picked = risen & holding & (action.primitive == primitives.GRASP)
     lost = state.in_play & ~picked & ~self._in_workspace(sim)

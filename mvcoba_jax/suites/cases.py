@@ -26,6 +26,7 @@ from mvcoba_jax.sim.scenarios import (
   read_case,
   stack_layouts,
 )
+from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.shapes import BLOCK_TABLES
 from mvcoba_jax.sim.tabletop import Layout, Tabletop
 
@@ -67,9 +68,10 @@ def suite_config(config, pool):
   Random drops (`env.num_objects`) play no part in evaluation; they only have to fit the pool.
   """
   slots = sum(n for _, n in pool)
+  parts = sum(len(shapes.shape(name).parts) * n for name, n in pool)  # mesh objects: many
   scene = dataclasses.replace(config.scene, pool=pool,
                               max_contact_points=max(config.scene.max_contact_points, 10 * slots),
-                              max_geom_pairs=max(config.scene.max_geom_pairs, 2 * slots))
+                              max_geom_pairs=max(config.scene.max_geom_pairs, 2 * slots, parts))
   env = dataclasses.replace(config.env, num_objects=min(config.env.num_objects, slots))
   return dataclasses.replace(config, scene=scene, env=env)
 

@@ -26,6 +26,7 @@ from mvcoba_jax.suites import SUITES_DIR
 from mvcoba_jax.suites import generate
 
 NOVEL_SEED = 70_000  # novel's draws; val-novel's are NOVEL_SEED + 5000
+TWIN = 'val-novel'  # the validation twin's folder under docs/results/validation
 HEAPS = (8, 10, 12, 14)  # objects of each heap case
 EVERYDAY = procedural.OBJECTS / 'everyday'
 VALIDATION_SET = procedural.OBJECTS / 'procedural-val'
@@ -77,7 +78,7 @@ def suites() -> dict[pathlib.Path, list[str]]:
       SUITES_DIR / 'novel': suite(everyday, [o for o in everyday
                                              if pathlib.Path(o).name in PACKABLE_EVERYDAY],
                                   NOVEL_SEED),
-      generate.VALIDATION_DIR / 'val-novel': suite(
+      generate.VALIDATION_DIR / TWIN: suite(
           validation, [o for o in validation if pathlib.Path(o).name.split('_', 1)[1]
                        in PACKABLE_KINDS], NOVEL_SEED + 5000),
   }

@@ -161,6 +161,27 @@ def test_the_robot_loop_example_runs_against_the_simulator(onnx):
   assert rig.objects() < before and any(r['changed'] for r in records)
 
 
+def test_the_policy_carries_its_gripper_and_refuses_another(onnx, capsys):
+  """model.json names the gripper the policy trained with; a grasp carries its opening; the
+  robot loop refuses a robot with another gripper in one line, unless told to act anyway."""
+  assert onnx.gripper['name'] == 'rg2' and onnx.gripper['max_opening'] == 0.11
+  OnnxPolicy(onnx.folder, gripper='rg2')
+  OnnxPolicy(onnx.folder, gripper=dict(onnx.gripper))
+  for other in ('robotiq_2f85', {**onnx.gripper, 'max_opening': 0.085}):
+    with pytest.raises(DeployError, match="trained with gripper 'rg2' .opening 0.11 m., the robot"):
+      OnnxPolicy(onnx.folder, gripper=other)
+  spec = importlib.util.spec_from_file_location('robot_loop', ROOT / 'examples' / 'robot_loop.py')
+  example = importlib.util.module_from_spec(spec)
+  spec.loader.exec_module(example)
+  assert example.main(['--model', str(onnx.folder), '--actions', '1',
+                       '--gripper', 'franka_hand']) == 2
+  assert capsys.readouterr().err.count('\n') == 1
+  assert example.main(['--model', str(onnx.folder), '--actions', '3', '--gripper', 'franka_hand',
+                       '--other-gripper']) == 0
+  rounds = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+  assert all(r['opening'] == (0.11 if r['primitive'] == 'grasp' else 0.0) for r in rounds)
+
+
 def test_the_deploy_extra_alone_turns_camera_files_into_the_same_action(scenes, onnx, tmp_path):
   """In a fresh virtualenv holding only `pip install '.[deploy]'` (numpy, OpenCV, onnxruntime:
   no JAX, no MuJoCo), examples/camera_action.py turns a scene's 16-bit PNG depth and colour files

@@ -2,6 +2,7 @@
 field and relation checks, and a bad value is refused with the key and what it allows."""
 import dataclasses
 import random
+import re
 import typing
 
 import pytest
@@ -16,6 +17,8 @@ from mvcoba_jax.config import (
   resolve,
   to_dict,
 )
+from mvcoba_jax.deploy import model_file
+from mvcoba_jax.sim import grippers, procedural
 
 
 @pytest.mark.parametrize('preset', PRESETS)
@@ -268,9 +271,34 @@ def test_contact_caps_a_settled_drop_cannot_fit_are_refused_on_mjx_and_warp():
   """`scene.max_contact_points=1` on Warp dropped objects through the table: refused on the two
   backends that cap contacts; native MuJoCo has no caps, so the fields mean nothing there."""
   for backend in ('mjx', 'warp'):
-    with pytest.raises(ConfigError, match='needs at least 4 contact points'):
+    with pytest.raises(ConfigError, match='needs at least 40 contact points'):
       resolve('default', [f'scene.backend={backend}', 'scene.max_contact_points=1'])
-    with pytest.raises(ConfigError, match='one geom pair per object'):
-      resolve('default', [f'scene.backend={backend}', 'scene.max_geom_pairs=5'])
+    with pytest.raises(ConfigError, match=r"objects' 14 convex parts on the table \(.*arch: 3"):
+      resolve('default', [f'scene.backend={backend}', 'scene.max_geom_pairs=13'])
     assert resolve('default', [f'scene.backend={backend}']).scene.max_contact_points == 120
   assert resolve('default', ['scene.backend=native', 'scene.max_contact_points=1'])
+  mug = str(procedural.OBJECTS / 'everyday' / 'mug')  # 12 parts
+  with pytest.raises(ConfigError, match=f"{mug}: 12 parts"):
+    resolve('default', ['scene.backend=mjx', f'scene.pool=cube:2,{mug}:1', 'env.num_objects=3',
+                        'scene.max_geom_pairs=12'])
+
+
+def test_the_gripper_is_one_description_set_by_preset_or_field():
+  """`scene.gripper=NAME` takes a preset whole; a field is set alone; a saved config from before
+  the gripper was a group (its friction the scene's) reads as the RG2 with that friction."""
+  config = resolve('default', ['scene.gripper=robotiq_2f85', 'scene.gripper.finger_force=50'])
+  assert config.scene.gripper == dataclasses.replace(grippers.ROBOTIQ_2F85, finger_force=50.0)
+  for assignment, says in (
+      ('scene.gripper=lego', "scene.gripper='lego': unknown gripper; presets: rg2, robotiq_2f85"),
+      ('scene.gripper.max_opening=0.015', 'must exceed twice scene.gripper.finger_thickness'),
+      ('scene.gripper.finger_length=0.02', 'env.grasp_depth=0.03 must be below'),
+      ('scene.gripper.finger_width=0', 'scene.gripper.finger_width=0.0: allowed range')):
+    with pytest.raises(ConfigError, match=re.escape(says)):
+      resolve('default', [assignment])
+  old = to_dict(resolve('default'))
+  del old['scene']['gripper']
+  old['scene']['finger_friction'] = 1.2
+  assert from_dict(old).scene.gripper == dataclasses.replace(grippers.RG2, finger_friction=1.2)
+  assert defaulted(old, from_dict(old)) == {}
+  assert dataclasses.asdict(grippers.RG2) == {**model_file.RG2, 'palm': tuple(model_file.RG2[
+      'palm'])}

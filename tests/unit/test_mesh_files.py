@@ -6,8 +6,7 @@ import pytest
 import trimesh
 
 from mvcoba_jax.config import ConfigError, override, resolve
-from mvcoba_jax.sim import everyday, meshes, procedural, shapes
-from mvcoba_jax.sim.scene import MAX_OPENING
+from mvcoba_jax.sim import everyday, grippers, meshes, procedural, shapes
 from mvcoba_jax.sim.scenarios import ScenarioError, read_case
 
 
@@ -116,4 +115,4 @@ def test_procedural_objects_are_grasp_sized():
     shape = shapes.shape(str(folder))
     assert 0.03 <= max(shape.extent) <= 0.12, folder.name
     narrowest = min(min(np.ptp(np.asarray(p.vertices)[:, :2], axis=0)) for p in shape.parts)
-    assert narrowest <= MAX_OPENING - 0.04, folder.name
+    assert narrowest <= grippers.RG2.max_opening - 0.04, folder.name
