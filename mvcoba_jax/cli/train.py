@@ -47,6 +47,9 @@ def parse(argv):
   parser.add_argument('--process-id', type=int, help='with --distributed: this process, 0..N-1')
   parser.add_argument('--eval-actions', type=int, default=40,
                       help='greedy actions (over all environments) in the closing evaluation')
+  parser.add_argument('--json', action='store_true',
+                      help='end with the training and greedy summaries as JSON lines instead '
+                           'of a table and the next commands')
   args = parser.parse_args(argv)
   cluster = (args.coordinator, args.num_processes, args.process_id)
   if not args.distributed and any(v is not None for v in cluster):
@@ -74,10 +77,11 @@ def main(argv=None) -> int:
   try:
     if args.methods or args.seeds:
       api.sweep(config, args.workdir, methods=args.methods, seeds=args.seeds,
-                resume=args.resume, overwrite=args.overwrite, eval_actions=args.eval_actions)
+                resume=args.resume, overwrite=args.overwrite, eval_actions=args.eval_actions,
+                json_report=args.json)
     else:
       api.train(config, args.workdir, resume=args.resume, overwrite=args.overwrite,
-                eval_actions=args.eval_actions)
+                eval_actions=args.eval_actions, json_report=args.json)
   except config_lib.Error as e:
     return fail(e)
   return 0

@@ -52,7 +52,7 @@ class TrainResult:
 
 
 def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = False,
-          eval_actions: int = 40, progress: bool = True) -> TrainResult:
+          eval_actions: int = 40, progress: bool = True, json_report: bool = False) -> TrainResult:
   """Trains `config` into `workdir` to `config.train.total_actions`, then a short greedy check.
 
   The work directory gets config.json, actions.jsonl (a line per action), metrics.jsonl (a line
@@ -60,7 +60,9 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
   checkpoints every `train.checkpoint_every` calls and at the end, curves.png and
   eval_summary.json.
   `resume` continues from its latest checkpoint; a directory holding an earlier run is refused
-  unless `resume` or `overwrite` (which deletes it first).
+  unless `resume` or `overwrite` (which deletes it first). It ends by printing a short table and
+  the commands that evaluate and export the run (`closing_report`), or with `json_report` the two
+  summaries as JSON lines (`training: {...}`, `greedy evaluation on random drops: {...}`).
   Raises TrainError before anything compiles when the config, directory or checkpoint cannot
   serve. On several devices the tabletops and replay are sharded (`sharding.py`); process 0
   writes the logs.
@@ -71,6 +73,7 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
                                                                 ('overwrite', overwrite)))
   eval_actions = arguments.count(call, 'eval_actions', eval_actions, 0, MAX_ACTIONS_LIMIT)
   progress = arguments.flag(call, 'progress', progress)
+  json_report = arguments.flag(call, 'json_report', json_report)
   if resume and overwrite:
     raise TrainError(f'{call}: resume continues the run and overwrite deletes it: give one')
   try:  # before anything is created or compiled: a folder held, a file where a folder goes
@@ -180,17 +183,41 @@ def _train(config: Config, trainer: Trainer, devices, workdir: pathlib.Path, res
           plot_curves(workdir, records, config)
   curve = plot_curves(workdir, records, config) if lead else None
   train_summary = summary(records)
-  say(f'training: {json.dumps(train_summary)}; wall {time.perf_counter() - start:.0f} s; '
-      f'curves {curve}')
+  seconds = time.perf_counter() - start
+  if json_report:
+    say(f'training: {json.dumps(train_summary)}; wall {seconds:.0f} s; curves {curve}')
   greedy = _greedy_check(iterate, state, eval_actions, per_iteration, len(trainer.task.views))
   if lead:
     (workdir / 'eval_summary.json').write_text(json.dumps(greedy, indent=1))
     for name in ('grasp_success', 'grasps_per_action'):
       events.add_scalar(f'greedy/{name}', greedy[name], int(state.actions))
     events.close()
-  say(f'greedy evaluation on random drops: {json.dumps(greedy)}')
+  if json_report:
+    say(f'greedy evaluation on random drops: {json.dumps(greedy)}')
+  else:
+    say(closing_report(train_summary, greedy, seconds, workdir, curve))
   return TrainResult(state=state, summary=train_summary, greedy=greedy, workdir=workdir,
                      curves=curve)
+
+
+def closing_report(trained: dict, greedy: dict, seconds: float, workdir, curve) -> str:
+  """What a user reads at the end of a run: its actions and time, grasp success and pushes in
+  training and in the greedy check, and the commands that evaluate and export it."""
+  def grasps(s: dict) -> str:
+    if not s['grasp_attempts']:
+      return f'no grasps, {s["pushes"]} pushes'
+    return (f'grasp success {100 * s["grasp_success"]:.1f} % ({s["grasp_successes"]} of '
+            f'{s["grasp_attempts"]}), {s["pushes"]} pushes')
+  rate = trained['actions'] / seconds if seconds > 0 else float('nan')
+  lines = [f'trained {trained["actions"]} actions in {seconds:.0f} s ({rate:.1f} actions/s)',
+           f'  training  {grasps(trained)}',
+           f'  greedy    {grasps(greedy)}, {greedy["actions"]} actions on random drops']
+  if curve:
+    lines.append(f'  curves    {curve}')
+  lines += ['next:', f'  mvcoba-eval --checkpoint {workdir} --suite dev-random dev-ordered '
+            'dev-occluded --runs 5', f'  mvcoba-export --checkpoint {workdir} --out '
+            f'{pathlib.Path(workdir) / "export"}']
+  return '\n'.join(lines)
 
 
 def _start(config: Config, trainer: Trainer, checkpoints: Checkpoints, workdir: pathlib.Path,
@@ -248,8 +275,8 @@ def sweep_runs(config: Config, workdir, methods=None, seeds=None) -> dict[pathli
 
 
 def sweep(config: Config, workdir, *, methods=None, seeds=None, resume: bool = False,
-          overwrite: bool = False, eval_actions: int = 40,
-          progress: bool = True) -> dict[pathlib.Path, TrainResult | None]:
+          overwrite: bool = False, eval_actions: int = 40, progress: bool = True,
+          json_report: bool = False) -> dict[pathlib.Path, TrainResult | None]:
   """Trains every run of `sweep_runs` in turn (`train`), then writes the sweep's curves to
   `workdir` (curves-METRIC.png: each method's mean over its seeds, with a band).
 
@@ -264,7 +291,8 @@ def sweep(config: Config, workdir, *, methods=None, seeds=None, resume: bool = F
   methods = None if methods is None else arguments.names(call, 'methods', methods,
                                                          methods_lib.names())
   seeds = None if seeds is None else arguments.counts(call, 'seeds', seeds, 0, 2 ** 31 - 1)
-  for name, value in (('resume', resume), ('overwrite', overwrite), ('progress', progress)):
+  for name, value in (('resume', resume), ('overwrite', overwrite), ('progress', progress),
+                      ('json_report', json_report)):
     arguments.flag(call, name, value)
   arguments.count(call, 'eval_actions', eval_actions, 0, MAX_ACTIONS_LIMIT)
   try:
@@ -287,7 +315,7 @@ def sweep(config: Config, workdir, *, methods=None, seeds=None, resume: bool = F
       say('  stopped before its first checkpoint: starting it again')
     results[run] = train(run_config, run, resume=resume and holds_checkpoint(run),
                          overwrite=overwrite or again, eval_actions=eval_actions,
-                         progress=progress)
+                         progress=progress, json_report=json_report)
   if jax.process_index() == 0:
     for path in plot_sweep(list(runs), config.train.curve_window, pathlib.Path(workdir)):
       say(f'sweep curves: {path}')

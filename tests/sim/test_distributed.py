@@ -27,7 +27,7 @@ def test_two_processes_train_as_one(tmp_path):
   env.pop('XLA_FLAGS', None)
   processes = [subprocess.Popen(
       [sys.executable, '-m', 'mvcoba_jax.cli.train', '--config', 'tiny', '--set', 'train.total_actions=4',
-       '--eval-actions', '1', '--workdir', str(workdir), '--distributed',
+       '--eval-actions', '1', '--json', '--workdir', str(workdir), '--distributed',
        '--coordinator', f'localhost:{port}', '--num-processes', '2', '--process-id', str(i)],
       cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
       for i in range(2)]
