@@ -154,8 +154,8 @@ def add_block_table(name: str, table: dict[str, str]) -> None:
   """Registers a block table: mesh file name -> one of SHAPE_NAMES or a mesh reference (made
   absolute here, relative to the working folder)."""
   table = {k: reference(v) for k, v in table.items()}
-  for reference in table.values():
-    shape(reference)
+  for name_or_path in table.values():
+    shape(name_or_path)  # a mesh that cannot be an object is refused now, not when a case loads
   BLOCK_TABLES[name] = table
 
 

@@ -116,3 +116,20 @@ def test_procedural_objects_are_grasp_sized():
     assert 0.03 <= max(shape.extent) <= 0.12, folder.name
     narrowest = min(min(np.ptp(np.asarray(p.vertices)[:, :2], axis=0)) for p in shape.parts)
     assert narrowest <= grippers.RG2.max_opening - 0.04, folder.name
+
+
+def test_a_block_table_may_map_a_vpg_mesh_name_to_a_mesh(tmp_path, monkeypatch):
+  """A VPG-format case whose `9.obj` is the user's own box, through a block table of their own;
+  resting at its half height, as VPG files give it."""
+  trimesh.creation.box((0.06, 0.04, 0.03)).export(tmp_path / 'box.obj')
+  monkeypatch.setattr(shapes, 'BLOCK_TABLES', dict(shapes.BLOCK_TABLES))  # this test's own
+  monkeypatch.chdir(tmp_path)
+  shapes.add_block_table('lab', {'9.obj': 'box.obj', '4.obj': 'cube'})  # relative: made absolute
+  case_file = tmp_path / 'lab.txt'
+  case_file.write_text('9.obj 0.3 0.4 0.5 -0.45 0.05 0.015 0.0 0.0 0.0\n'
+                       '4.obj 0.3 0.4 0.5 -0.55 -0.05 0.026 0.0 0.0 0.0\n')
+  box, cube = read_case(case_file, blocks='lab').objects
+  assert box.shape == str(tmp_path / 'box.obj') and cube.shape == 'cube'
+  assert box.pos[2] == pytest.approx(0.015 + 0.001)
+  with pytest.raises(meshes.MeshError, match="unknown shape 'lego'"):
+    shapes.add_block_table('bad', {'5.obj': 'lego'})
