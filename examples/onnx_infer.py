@@ -25,7 +25,7 @@ import onnxruntime as ort
 
 from mvcoba_jax.deploy import DeployError, model_file
 from mvcoba_jax.deploy.heightmaps import filled
-from mvcoba_jax.sim.push import push_length
+from mvcoba_jax.sim.contract import pixel_to_world, push_length
 
 
 def choose(session: ort.InferenceSession, color: np.ndarray, depth: np.ndarray,
@@ -41,13 +41,13 @@ def choose(session: ort.InferenceSession, color: np.ndarray, depth: np.ndarray,
 def to_world(action: dict, depth: np.ndarray, model: dict) -> dict:
   """Adds angle, the world point (x, y, z) of the action, per model.json 'pixel_to_world', and
   how far a push slides (the length it trained with, cut at the workspace's edge as the simulator
-  cuts it: `sim.push.push_length`; 0 for a grasp)."""
+  cuts it: `sim.contract.push_length`; 0 for a grasp)."""
   hm = model['heightmap']
   res, half = hm['resolution_m'], hm['workspace_half_m']
   row, col = action['row'], action['col']
   names = {v: k for k, v in model['primitives'].items()}
   angle = model['rotations']['angles_rad'][action['rotation']]
-  x, y = -half + (col + 0.5) * res, -half + (row + 0.5) * res
+  x, y = pixel_to_world(row, col, res, half)
   push = action['primitive'] == model['primitives']['push']
   return {'primitive_name': names[action['primitive']], **action, 'angle_rad': angle, 'x': x,
           'y': y, 'z': float(depth[hm['views_used'], row, col].max()),

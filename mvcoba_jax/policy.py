@@ -24,7 +24,7 @@ from mvcoba_jax.deploy.calibration import DeployError
 from mvcoba_jax.deploy.heightmaps import filled
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.sim.geometry import rotation_angle
-from mvcoba_jax.sim.push import push_length
+from mvcoba_jax.sim.contract import push_length
 from mvcoba_jax.learner.checkpoint import CheckpointError, Checkpoints, incompatibilities
 
 PARAM_LIMIT = 1e6  # no trained weight comes near this; a larger one is damage, not learning
@@ -48,7 +48,7 @@ class Decision:
   z: float  # the highest surface the method's views see in the cell
   q: float  # the rule's score of the action
   # m a push slides along `angle`: env.push_length cut at the workspace's edge, as the simulator
-  # and the robot cut it (`sim.push.push_length`); 0 for a grasp
+  # and the robot cut it (`sim.contract.push_length`); 0 for a grasp
   push_length: float
 
 

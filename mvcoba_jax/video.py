@@ -18,7 +18,7 @@ from mujoco import batch as mjbatch
 from mvcoba_jax.learner.task import Task
 from mvcoba_jax.sim import cameras
 from mvcoba_jax.sim.config import CameraConfig
-from mvcoba_jax.sim.geometry import pixel_to_world
+from mvcoba_jax.sim.contract import pixel_to_world
 from mvcoba_jax.sim.primitives import GRASP
 from mvcoba_jax.sim.scene import camera_xyaxes
 

@@ -10,9 +10,10 @@ import numpy as np
 from mvcoba_jax import perception
 from mvcoba_jax.learner.task import Task
 from mvcoba_jax.sim import cameras
-from mvcoba_jax.sim.geometry import pixel_to_world, rotation_angle
+from mvcoba_jax.sim.contract import pixel_to_world
+from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.sim.primitives import GRASP
-from mvcoba_jax.sim.push import push_length
+from mvcoba_jax.sim.contract import push_length
 
 # Action markers (BGR): a push, a grasp that lifted an object, a grasp that did not.
 PUSH_COLOR, GRASP_OK_COLOR, GRASP_FAILED_COLOR = (255, 160, 0), (0, 200, 0), (0, 0, 230)

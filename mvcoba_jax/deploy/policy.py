@@ -12,7 +12,7 @@ import numpy as np
 from mvcoba_jax.deploy import checks, model_file
 from mvcoba_jax.deploy.calibration import Calibration, DeployError
 from mvcoba_jax.deploy.heightmaps import changed_views, filled
-from mvcoba_jax.sim.push import push_length
+from mvcoba_jax.sim.contract import pixel_to_world, push_length
 
 
 @dataclasses.dataclass(frozen=True)
@@ -22,7 +22,7 @@ class Action:
   position: tuple[float, float, float]  # base frame: the cell's centre at its surface height
   angle: float  # base frame: the gripper's yaw and the push direction about +z
   push_length: float  # m a push slides along `angle`: config.env.push_length, cut short at the
-  # workspace's edge (`sim.push.push_length`); 0 for a grasp
+  # workspace's edge (`sim.contract.push_length`); 0 for a grasp
   opening: float  # m to open the fingers to before a grasp (the gripper's max_opening); 0 for
   # a push, which goes closed
   rotation: int
@@ -118,7 +118,7 @@ class OnnxPolicy:
     colour out of its range (`checks.observation`; non-finite cells count as unseen), a frame
     where a camera saw none of the workspace, or when the action has a non-finite score or would
     leave the workspace or go below the table (`checks.action`); a push ends at the workspace's
-    edge at the farthest (`sim.push.push_length`)."""
+    edge at the farthest (`sim.contract.push_length`)."""
     self.check(calibration)
     spec = self.spec
     res, half = spec.resolution_m, spec.workspace_half_m
@@ -135,7 +135,7 @@ class OnnxPolicy:
     if blind:
       raise DeployError(f'refused: camera {", ".join(blind)} sees none of the workspace')
     primitive, rotation, row, col, score = self.choose(color, depth, changed)
-    x, y = -half + (col + 0.5) * res, -half + (row + 0.5) * res
+    x, y = pixel_to_world(row, col, res, half)
     z = float(depth[used, row, col].max())
     angle = spec.angles_rad[rotation] + calibration.yaw
     try:

@@ -25,7 +25,7 @@ from mvcoba_jax.evaluation.metrics import RunLog
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.learner import replay as replay_lib
 from mvcoba_jax.learner.task import Outcome, State, Task
-from mvcoba_jax.sim.geometry import pixel_to_world
+from mvcoba_jax.sim.contract import pixel_to_world
 from mvcoba_jax.sim.tabletop import Layout, where_envs
 from mvcoba_jax.suites.cases import start
 

@@ -15,7 +15,7 @@ from flax import struct
 from mvcoba_jax.config import Config, TrainConfig
 from mvcoba_jax.learner import networks, suppression
 from mvcoba_jax.methods import Method
-from mvcoba_jax.sim.geometry import pixel_to_world
+from mvcoba_jax.sim.contract import pixel_to_world
 from mvcoba_jax.sim.primitives import GRASP, PUSH, Action  # noqa: F401  (agent.PUSH for callers)
 
 

@@ -1,8 +1,8 @@
 """The one place for frames and rotations.
 
-Pixel (row, col) of a heightmap <-> world (x, y): row grows with y, col grows with x, and pixel
-(r, c) covers the cell whose lower corner is (x0 + c * res, y0 + r * res); its centre is the
-world point it stands for. Rotation index k means the angle k * 2 * pi / num_rotations.
+Pixel (row, col) of a heightmap <-> world (x, y): row grows with y, col grows with x
+(`contract.pixel_to_world`, the robot's contract, gives a cell's centre). Rotation index k means
+the angle k * 2 * pi / num_rotations.
 """
 from __future__ import annotations
 
@@ -51,13 +51,6 @@ def matrix_to_quat(m: np.ndarray) -> np.ndarray:
   return q
 
 
-def pixel_to_world(row, col, resolution: float, workspace_half: float):
-  """Centre (x, y) of heightmap pixel (row, col)."""
-  x = -workspace_half + (col + 0.5) * resolution
-  y = -workspace_half + (row + 0.5) * resolution
-  return x, y
-
-
 def world_to_pixel(x, y, resolution: float, workspace_half: float):
   """Heightmap (row, col) of the cell that contains world point (x, y) (may be out of range)."""
   col = jnp.floor((x + workspace_half) / resolution).astype(jnp.int32)
@@ -68,9 +61,9 @@ def world_to_pixel(x, y, resolution: float, workspace_half: float):
 def rotate_images(images, angle):
   """`images` (N, H, W, C) rotated by `angle` (scalar or (N,) rad) about the image centre.
 
-  Counter-clockwise in the pixel frame (x = col, y = row), the frame of `pixel_to_world`, so a
-  world direction at yaw t points at yaw t + angle afterwards: content at (x, y) relative to the
-  centre moves to (x cos a - y sin a, x sin a + y cos a). Each output pixel samples its source
+  Counter-clockwise in the pixel frame (x = col, y = row), the frame of `contract.pixel_to_world`,
+  so a world direction at yaw t points at yaw t + angle afterwards: content at (x, y) relative to
+  the centre moves to (x cos a - y sin a, x sin a + y cos a). Each output pixel samples its source
   bilinearly; sources outside the image read 0 (a missing cell). Linear in `images`, smooth in
   `angle`: the networks rotate inputs by -angle and outputs back by +angle with it.
   """

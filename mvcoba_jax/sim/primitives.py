@@ -14,7 +14,7 @@ from flax import struct
 
 from mvcoba_jax.sim.config import EnvConfig, GripperConfig
 from mvcoba_jax.sim.geometry import rotation_angle
-from mvcoba_jax.sim.push import push_length
+from mvcoba_jax.sim.contract import push_length
 
 PUSH, GRASP = 0, 1
 FINGER_SQUEEZE = -0.01  # target past closed: the fingers keep squeezing what they hold
@@ -89,7 +89,7 @@ def start_pose(action: Action, env: EnvConfig, gripper: GripperConfig):
 def target(script: Script, action: Action, env: EnvConfig, gripper: GripperConfig, half: float,
            t):
   """Actuator targets at physics step t of the primitive; a push stops at the workspace's edge
-  (+-`half`), as the robot's does (`sim.push.push_length`)."""
+  (+-`half`), as the robot's does (`sim.contract.push_length`)."""
   start, work = tip_heights(action, env)
   yaw = rotation_angle(action.rotation, env.num_rotations)
   ramp = lambda t0, n: jnp.clip((t - t0 + 1) / n, 0.0, 1.0)

@@ -9,7 +9,7 @@ from mvcoba_jax import perception
 from mvcoba_jax.deploy.heightmaps import changed_views
 from mvcoba_jax.learner import networks
 from mvcoba_jax.sim import shapes
-from mvcoba_jax.sim.geometry import pixel_to_world
+from mvcoba_jax.sim.contract import pixel_to_world
 from mvcoba_jax.sim.scenarios import case_to_layout, read_case
 from tests.helpers import BACKENDS, layout, make_task, stack
 

@@ -131,7 +131,7 @@ def test_push_separates_a_block_from_a_row(env, outcome):
 
 
 def test_a_push_stops_at_the_workspace_edge(env):
-  """The simulator's push follows the robot's contract (`sim.push.push_length`): the fingers
+  """The simulator's push follows the robot's contract (`sim.contract.push_length`): the fingers
   slide the trained length from well inside, and stop at the border from 3 cm before it."""
   half, length = env.config.scene.workspace_half, env.config.env.push_length
   for x0, end in ((0.0, length), (half - 0.03, half)):

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from mvcoba_jax.deploy import checks
-from mvcoba_jax.sim.push import push_length
+from mvcoba_jax.sim.contract import push_length
 
 SIDE, TOP, HALF = 8, 0.4, 0.224
 
