@@ -31,6 +31,14 @@ class Action:
   q: float
 
 
+def _flag(name: str, value, meaning: str) -> bool:
+  """`value` as a bool when it is one (Python's or numpy's); DeployError otherwise: a robot's
+  reading that is not a plain yes or no must not steer the rule by its truthiness."""
+  if isinstance(value, (bool, np.bool_)):
+    return bool(value)
+  raise DeployError(f'{name}={value!r:.40}: True or False ({meaning})')
+
+
 def check_gripper(trained: dict, robot: str | dict, folder) -> None:
   """DeployError unless the robot's gripper (a name, or the fields of one) is the one the policy
   trained with: same name, and where fields are given, the same values (1e-6 m)."""
@@ -119,6 +127,7 @@ class OnnxPolicy:
     where a camera saw none of the workspace, or when the action has a non-finite score or would
     leave the workspace or go below the table (`checks.action`); a push ends at the workspace's
     edge at the farthest (`sim.contract.push_length`)."""
+    changed = _flag('changed', changed, 'did the last action change the scene')
     self.check(calibration)
     spec = self.spec
     res, half = spec.resolution_m, spec.workspace_half_m
@@ -162,6 +171,13 @@ class OnnxPolicy:
     before it that held nothing) reach its `failed_grasp_retries`. `grasped`: None after a push,
     or where the robot cannot tell."""
     spec = self.spec
+    if grasped is not None:
+      grasped = _flag('grasped', grasped, 'did the grasp hold something; None after a push or '
+                      'where the robot cannot tell')
+    if isinstance(failed_grasps, (bool, np.bool_)) or not isinstance(
+        failed_grasps, (int, np.integer)) or failed_grasps < 0:
+      raise DeployError(f'failed_grasps={failed_grasps!r:.40}: a whole number of 0 or more (the '
+                        'grasps in a row before this one that held nothing)')
     if grasped:
       return True
     if (grasped is False and not spec.failed_grasp_changes

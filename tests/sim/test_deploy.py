@@ -161,6 +161,37 @@ def test_the_robot_loop_example_runs_against_the_simulator(onnx):
   assert rig.objects() < before and any(r['changed'] for r in records)
 
 
+def test_the_deploy_api_takes_a_plain_yes_or_no_as_the_jax_policy_does(scenes, onnx):
+  """The same `changed` values to `Policy.act` and `OnnxPolicy.act`: numpy's booleans act as
+  Python's, the same action on both; anything else ('no', None, [], 0, a 0-d array) is refused by
+  both in one line. `OnnxPolicy.changed`: a gripper's np.False_ applies the failed-grasp rule as
+  False does; a reading that is no boolean, or failed grasps that are no whole number, refused."""
+  env, _, _, observed = scenes
+  jax_policy = policy.load(ROOT / 'pretrained' / 'mvcoba')
+  cal = calibration_from_dict(calibration(env))
+  color, depth, seen = (np.asarray(a[0]) for a in (observed.color, observed.depth, observed.seen))
+  for flag in (True, np.True_, np.False_):
+    want = jax_policy.act(color, depth, flag, seen=seen)
+    got = onnx.act(color, depth, seen, flag, cal)
+    assert (got.primitive, got.rotation, got.row, got.col) == (
+        want.primitive, want.rotation, want.row, want.col)
+  for bad in ('no', None, [], 0, np.asarray(True)):
+    with pytest.raises(policy.PolicyError, match='True or False'):
+      jax_policy.act(color, depth, bad, seen=seen)
+    with pytest.raises(DeployError, match=r'^changed=.*: True or False'):
+      onnx.act(color, depth, seen, bad, cal)
+  frame = (depth, seen)
+  assert onnx.changed(frame, frame, grasped=np.True_) is True
+  retries = onnx.spec.failed_grasp_retries
+  assert onnx.changed(frame, frame, grasped=np.False_, failed_grasps=np.int64(retries)) is False
+  for bad in ('no', 0, np.asarray(False)):
+    with pytest.raises(DeployError, match=r'^grasped=.*: True or False'):
+      onnx.changed(frame, frame, grasped=bad)
+  for bad in (-1, 1.5, '1', None, True):
+    with pytest.raises(DeployError, match=r'^failed_grasps=.*: a whole number'):
+      onnx.changed(frame, frame, grasped=False, failed_grasps=bad)
+
+
 def test_the_policy_carries_its_gripper_and_refuses_another(onnx, capsys):
   """model.json names the gripper the policy trained with; a grasp carries its opening; the
   robot loop refuses a robot with another gripper in one line, unless told to act anyway."""
