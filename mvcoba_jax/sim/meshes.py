@@ -66,9 +66,10 @@ def split_reference(reference: str) -> tuple[pathlib.Path, float]:
 
 def absolute(reference: str, base: pathlib.Path | None = None) -> str:
   """`reference` with its path made absolute (relative to `base`, else the working folder)."""
-  path, scale = split_reference(reference)
+  path, _ = split_reference(reference)  # the scale checked, and kept as written
   full = os.path.abspath(pathlib.Path(base or '.') / path)
-  return full if scale == 1.0 else f'{full}@{scale:g}'
+  at, scale = reference.rpartition('@')[1:]
+  return full + at + scale
 
 
 def _read(path: pathlib.Path):
