@@ -68,8 +68,8 @@ def absolute(reference: str, base: pathlib.Path | None = None) -> str:
   """`reference` with its path made absolute (relative to `base`, else the working folder)."""
   path, _ = split_reference(reference)  # the scale checked, and kept as written
   full = os.path.abspath(pathlib.Path(base or '.') / path)
-  at, scale = reference.rpartition('@')[1:]
-  return full + at + scale
+  _, at, scale = reference.rpartition('@')
+  return full + (at + scale if at else '')
 
 
 def _read(path: pathlib.Path):
