@@ -106,7 +106,8 @@ def train(config: Config, workdir, *, resume: bool = False, overwrite: bool = Fa
   except folders.FolderError as e:
     raise TrainError(str(e)) from None
   try:
-    return _train(config, trainer, devices, workdir, resume, eval_actions, progress, lead)
+    return _train(config, trainer, devices, workdir, resume, eval_actions, progress, lead,
+                  json_report)
   finally:
     folders.release(workdir)
 
@@ -139,7 +140,7 @@ def resumable(config: Config, workdir: pathlib.Path) -> None:
 
 
 def _train(config: Config, trainer: Trainer, devices, workdir: pathlib.Path, resume: bool,
-           eval_actions: int, progress: bool, lead: bool) -> TrainResult:
+           eval_actions: int, progress: bool, lead: bool, json_report: bool) -> TrainResult:
   """`train` once its work directory is held."""
   runtime.setup()
   checkpoints = Checkpoints(workdir)  # every process takes part in saving its shards
