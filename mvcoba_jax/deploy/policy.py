@@ -39,12 +39,22 @@ def _flag(name: str, value, meaning: str) -> bool:
   raise DeployError(f'{name}={value!r:.40}: True or False ({meaning})')
 
 
+def _same(value, trained) -> bool:
+  """Whether a gripper field given for the robot is the trained one's (numbers within 1e-6)."""
+  try:
+    return bool(np.allclose(np.asarray(value, float), np.asarray(trained, float), atol=1e-6))
+  except (TypeError, ValueError):  # not numbers, or not as many
+    return False
+
+
 def check_gripper(trained: dict, robot: str | dict, folder) -> None:
   """DeployError unless the robot's gripper (a name, or the fields of one) is the one the policy
   trained with: same name, and where fields are given, the same values (1e-6 m)."""
+  if not isinstance(robot, (str, dict)):
+    raise DeployError(f'gripper={robot!r:.40}: a preset\'s name or a dict of its fields')
   name = robot if isinstance(robot, str) else robot.get('name')
   differs = [k for k, v in ({} if isinstance(robot, str) else robot).items()
-             if k != 'name' and k in trained and not np.allclose(v, trained[k], atol=1e-6)]
+             if k != 'name' and k in trained and not _same(v, trained[k])]
   if name != trained['name'] or differs:
     what = f'{name!r}' + (f' ({", ".join(f"{k} {robot[k]!r}" for k in differs)})'
                           if differs else '')

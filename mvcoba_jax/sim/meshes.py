@@ -137,13 +137,20 @@ def _split(path: pathlib.Path, mesh) -> list[np.ndarray]:
     with np.load(cached) as saved:
       return [saved[f'part{i}'] for i in range(len(saved.files))]
   coacd.set_log_level('error')
-  parts = coacd.run_coacd(coacd.Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
-                          **COACD)
+  try:
+    parts = coacd.run_coacd(coacd.Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
+                            **COACD)
+  except Exception as e:  # CoACD raises what its C++ core raises
+    raise MeshError(f'{path}: CoACD cannot split it ({type(e).__name__}: {str(e)[:120]}); give a '
+                    'folder of convex parts instead') from None
   vertices = [np.asarray(v, np.float64) for v, _ in parts]
-  cached.parent.mkdir(parents=True, exist_ok=True)
   partial = cached.with_suffix(f'.{os.getpid()}.npz')
-  np.savez(partial, **{f'part{i}': v for i, v in enumerate(vertices)})
-  os.replace(partial, cached)  # whole or absent: a killed run leaves no half file
+  try:
+    cached.parent.mkdir(parents=True, exist_ok=True)
+    np.savez(partial, **{f'part{i}': v for i, v in enumerate(vertices)})
+    os.replace(partial, cached)  # whole or absent: a killed run leaves no half file
+  except OSError:  # a cache that cannot be written costs the next run the split, nothing else
+    partial.unlink(missing_ok=True)
   return vertices
 
 
