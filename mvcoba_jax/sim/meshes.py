@@ -9,7 +9,8 @@ part keeps at most MAX_PART_VERTICES hull vertices (MJX's convex collision does 
 and face). The object's frame is its bounding box's centre, as the blocks' (VPG's mesh frame).
 
 A reference is a path with an optional scale: `mug.obj`, `scans/mug.stl@0.001` (millimetres).
-Units are metres after the scale.
+Units are metres after the scale. The shipped object sets are named inside the package,
+`package:sim/objects/everyday/mug`, so saved configs do not depend on where it is installed.
 """
 from __future__ import annotations
 
@@ -35,6 +36,8 @@ MAX_SIZE = 1.0  # m: beyond this a file is most likely in millimetres (`path@0.0
 COACD = {'threshold': 0.05, 'max_convex_hull': MAX_PARTS, 'preprocess_resolution': 50,
          'mcts_iterations': 150, 'max_ch_vertex': MAX_PART_VERTICES, 'seed': 0}
 CACHE_VERSION = 1
+PACKAGE = pathlib.Path(__file__).resolve().parents[1]  # mvcoba_jax/
+IN_PACKAGE = 'package:'  # how a reference names a file inside it
 
 
 class MeshError(Error):
@@ -50,24 +53,33 @@ def cache_folder() -> pathlib.Path:
   return root / 'meshes'
 
 
+def _located(path: str) -> pathlib.Path:
+  """A reference's path as a file: `package:` ones inside the installed package."""
+  return PACKAGE / path[len(IN_PACKAGE):] if path.startswith(IN_PACKAGE) else pathlib.Path(path)
+
+
 def split_reference(reference: str) -> tuple[pathlib.Path, float]:
   """The path and scale of `path[@scale]`."""
   path, at, scale_text = reference.rpartition('@')
   if not at:
-    return pathlib.Path(reference), 1.0
+    return _located(reference), 1.0
   try:
     scale = float(scale_text)
   except ValueError:
     raise MeshError(f'{reference}: scale {scale_text!r} after @ is not a number') from None
   if not 0.0 < scale < 1e6:
     raise MeshError(f'{reference}: scale {scale_text} must be positive')
-  return pathlib.Path(path), scale
+  return _located(path), scale
 
 
 def absolute(reference: str, base: pathlib.Path | None = None) -> str:
-  """`reference` with its path made absolute (relative to `base`, else the working folder)."""
+  """`reference` with its path made absolute (relative to `base`, else the working folder); a
+  file inside the package (the shipped object sets) is named `package:PATH`, so a config that
+  trained on it reads the same wherever the package is installed."""
   path, _ = split_reference(reference)  # the scale checked, and kept as written
   full = os.path.abspath(pathlib.Path(base or '.') / path)
+  if pathlib.Path(full).is_relative_to(PACKAGE):
+    full = IN_PACKAGE + pathlib.Path(full).relative_to(PACKAGE).as_posix()
   _, at, scale = reference.rpartition('@')
   return full + (at + scale if at else '')
 

@@ -5,7 +5,7 @@ import jax
 import numpy as np
 import pytest
 
-from mvcoba_jax.sim import procedural, shapes
+from mvcoba_jax.sim import meshes, procedural, shapes
 from mvcoba_jax.sim.primitives import GRASP
 from tests.helpers import actions, layout, make_env, stack
 
@@ -18,7 +18,8 @@ def env():
 
 
 def test_every_training_object_is_lifted_at_some_rotation(env):
-  slots = [env.scene.index.slot_shapes.index(str(p)) for p in procedural.training_objects()]
+  slots = [env.scene.index.slot_shapes.index(meshes.absolute(str(p)))
+           for p in procedural.training_objects()]
   layouts, rows = [], []
   for slot in slots:
     shape = shapes.shape(env.scene.index.slot_shapes[slot])

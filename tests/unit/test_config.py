@@ -277,8 +277,8 @@ def test_contact_caps_a_settled_drop_cannot_fit_are_refused_on_mjx_and_warp():
       resolve('default', [f'scene.backend={backend}', 'scene.max_geom_pairs=13'])
     assert resolve('default', [f'scene.backend={backend}']).scene.max_contact_points == 120
   assert resolve('default', ['scene.backend=native', 'scene.max_contact_points=1'])
-  mug = str(procedural.OBJECTS / 'everyday' / 'mug')  # 12 parts
-  with pytest.raises(ConfigError, match=f"{mug}: 12 parts"):
+  mug = str(procedural.OBJECTS / 'everyday' / 'mug')  # 12 parts, named inside the package
+  with pytest.raises(ConfigError, match="package:sim/objects/everyday/mug: 12 parts"):
     resolve('default', ['scene.backend=mjx', f'scene.pool=cube:2,{mug}:1', 'env.num_objects=3',
                         'scene.max_geom_pairs=12'])
 

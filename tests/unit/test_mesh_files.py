@@ -133,3 +133,15 @@ def test_a_block_table_may_map_a_vpg_mesh_name_to_a_mesh(tmp_path, monkeypatch):
   assert box.pos[2] == pytest.approx(0.015 + 0.001)
   with pytest.raises(meshes.MeshError, match="unknown shape 'lego'"):
     shapes.add_block_table('bad', {'5.obj': 'lego'})
+
+
+def test_the_shipped_objects_are_named_inside_the_package(tmp_path, monkeypatch):
+  """From any working folder, a path into the package's object sets is `package:...`, so a saved
+  config that trained on them reads the same wherever the package is installed."""
+  monkeypatch.chdir(tmp_path)
+  mug = procedural.OBJECTS / 'everyday' / 'mug'
+  for given in (str(mug), f'{mug}@1.5', 'package:sim/objects/everyday/mug'):
+    name = shapes.reference(given)
+    assert name.startswith('package:sim/objects/everyday/mug') and not name.startswith('/')
+  assert shapes.shape('package:sim/objects/everyday/mug@1.5').extent[2] == pytest.approx(
+      1.5 * shapes.shape('package:sim/objects/everyday/mug').extent[2])
