@@ -105,11 +105,14 @@ def test_wheel_carries_presets_suites_and_entry_points(tmp_path):
   names = zipfile.ZipFile(wheel).namelist()
   for suite, count in (('random', 6), ('ordered', 8), ('packed-ring', 4), ('packed-t_shape', 4),
                        ('packed-stack', 4), ('occluded', 12), ('isolated', 16),
-                       ('dev-random', 6), ('dev-ordered', 6), ('dev-occluded', 12)):
+                       ('dev-random', 6), ('dev-ordered', 6), ('dev-occluded', 12),
+                       ('novel', 8)):
     assert sum(n.startswith(f'mvcoba_jax/suites/{suite}/') and n.endswith('.scn')
                for n in names) == count, suite
   assert sum(n.startswith('mvcoba_jax/suites/vpg/test-10-obj-') for n in names) == 11
   assert 'mvcoba_jax/suites/manifest.json' in names
+  shipped = {str(p.relative_to(ROOT)) for p in (PACKAGE / 'sim' / 'objects').rglob('*.*')}
+  assert shipped and shipped <= set(names)  # the object sets the novel suite and presets name
   assert {'mvcoba_jax/presets/default.py', 'mvcoba_jax/presets/tiny.py',
           'mvcoba_jax/sim/tabletop.py', 'mvcoba_jax/suites/vpg/LICENSE-vpg'} <= set(names)
   assert not any(n.startswith(('tests/', 'benchmarks/')) for n in names)
