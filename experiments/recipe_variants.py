@@ -106,6 +106,9 @@ VARIANTS = {
     # Issue 81's screen: today's default with the 14 procedural training objects beside the
     # blocks (the `objects` preset), against `cut_default` at the same seeds.
     'objects': ['--config', 'objects'],
+    # Issue 82's per-gripper training: today's default for each gripper preset.
+    'gripper_robotiq_2f85': ['--config', 'default', '--set', 'scene.gripper=robotiq_2f85'],
+    'gripper_franka_hand': ['--config', 'default', '--set', 'scene.gripper=franka_hand'],
 }
 # variant -> the variant whose finished run it resumes to more actions. The same as training
 # that long in one go: nothing in the recipe reads the total (constant learning rate, exploration
