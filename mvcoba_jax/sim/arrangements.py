@@ -31,12 +31,12 @@ def height(shape: str) -> float:
   return float(shapes.shape(shape).rest_extent[2])
 
 
-def _row(rng, names, y: float, gap: float) -> tuple[list[tuple], float]:
-  """`names` end to end along x from 0, each along the row or turned across it (drawn), their
-  centres half their depth above the line y; also the row's depth."""
+def row(rng, names, y: float, gap: float, turns: bool = True) -> tuple[list[tuple], float]:
+  """`names` end to end along x from 0, each along the row or, with `turns`, turned across it
+  (drawn), their centres half their depth above the line y; also the row's depth."""
   parts, cursor, depth = [], 0.0, 0.0
   for name in names:
-    yaw = 90.0 * rng.integers(2)
+    yaw = 90.0 * rng.integers(2) if turns else 0.0
     size = footprint(name, yaw)
     parts.append((name, cursor + 0.5 * size[0], y + 0.5 * size[1], yaw, 0.0))
     cursor, depth = cursor + size[0] + gap, max(depth, size[1])
@@ -50,8 +50,8 @@ def rows(rng) -> list[tuple]:
     length, names = rng.uniform(0.10, 0.20), []
     while sum(footprint(n).max() for n in names) < length:
       names.append(BOXES[rng.integers(len(BOXES))])
-    row, depth = _row(rng, names, y, gap)
-    parts, y = parts + row, y + depth + gap
+    row_parts, depth = row(rng, names, y, gap)
+    parts, y = parts + row_parts, y + depth + gap
   return parts
 
 
@@ -79,8 +79,8 @@ def mixed(rng) -> list[tuple]:
   names_all = shapes.SHAPE_NAMES
   for _ in range(rng.integers(2, 4)):
     names = [names_all[i] for i in rng.integers(len(names_all), size=rng.integers(2, 5))]
-    row, depth = _row(rng, names, y, gap)
-    parts, y = parts + row, y + depth + gap
+    row_parts, depth = row(rng, names, y, gap)
+    parts, y = parts + row_parts, y + depth + gap
   return parts
 
 

@@ -44,11 +44,6 @@ def _walls(outer, height, wall, bottom, top_outer=None, segments=8) -> list[np.n
   return parts
 
 
-def _box(size, centre=(0.0, 0.0, 0.0)) -> np.ndarray:
-  corners = np.array([[x, y, z] for x in (-.5, .5) for y in (-.5, .5) for z in (-.5, .5)])
-  return corners * np.asarray(size) + np.asarray(centre)
-
-
 def _ellipsoid(radii, n=64) -> np.ndarray:
   golden = np.pi * (3.0 - np.sqrt(5.0))  # a Fibonacci sphere: even, no random stream
   z = 1 - 2 * (np.arange(n) + 0.5) / n
@@ -71,23 +66,24 @@ def _banana() -> list[np.ndarray]:
 def objects() -> dict[str, list[np.ndarray]]:
   """Name -> convex parts (metres, resting as they lie on a table)."""
   mug = _walls(0.043, 0.081, 0.005, 0.006)
-  mug += [_box((0.03, 0.012, 0.012), (0.058, 0.0, 0.066)),
-          _box((0.012, 0.012, 0.05), (0.068, 0.0, 0.04)),
-          _box((0.03, 0.012, 0.012), (0.058, 0.0, 0.016))]
+  mug += [procedural.box((0.058, 0.0, 0.066), (0.03, 0.012, 0.012)),
+          procedural.box((0.068, 0.0, 0.04), (0.012, 0.012, 0.05)),
+          procedural.box((0.058, 0.0, 0.016), (0.03, 0.012, 0.012))]
   return {
       'mug': mug,
       'cup': _walls(0.034, 0.065, 0.004, 0.005, top_outer=0.04),
       'bowl': _walls(0.05, 0.053, 0.006, 0.006, top_outer=0.08),
       'soup_can': [_cylinder(0.033, 0.101)],
       'tuna_can': [_cylinder(0.043, 0.033)],
-      'mustard_bottle': [_box((0.15, 0.058, 0.058)),  # lying on its side, cap along +x
+      # lying on its side, cap along +x
+      'mustard_bottle': [procedural.box((0, 0, 0), (0.15, 0.058, 0.058)),
                          _cylinder(0.012, 0.04, axis=0) + (0.095, 0.0, 0.0)],
       'banana': _banana(),
       'apple': [_ellipsoid((0.0375, 0.0375, 0.035))],
       'tennis_ball': [_ellipsoid((0.032, 0.032, 0.032))],
       'large_marker': [_cylinder(0.009, 0.121, axis=0)],
-      'pudding_box': [_box((0.11, 0.089, 0.035))],
-      'gelatin_box': [_box((0.089, 0.073, 0.028))],
+      'pudding_box': [procedural.box((0, 0, 0), (0.11, 0.089, 0.035))],
+      'gelatin_box': [procedural.box((0, 0, 0), (0.089, 0.073, 0.028))],
   }
 
 

@@ -29,9 +29,10 @@ def training_objects() -> list[pathlib.Path]:
   return sorted(p for p in (OBJECTS / 'procedural').iterdir() if p.is_dir())
 
 
-def _box(center, size) -> np.ndarray:
+def box(centre, size) -> np.ndarray:
+  """The 8 corners of a box of `size` about `centre`."""
   corners = np.array([[x, y, z] for x in (-.5, .5) for y in (-.5, .5) for z in (-.5, .5)])
-  return np.asarray(center) + corners * np.asarray(size)
+  return np.asarray(centre) + corners * np.asarray(size)
 
 
 def _ellipsoid_points(rng, radii, n) -> np.ndarray:
@@ -69,21 +70,21 @@ def shape_parts(kind: str, rng: np.random.Generator) -> list[np.ndarray]:
   t = rng.uniform(0.018, 0.03)  # wall thickness of the bars and composites
   h = rng.uniform(0.02, 0.05)  # height
   if kind == 'bar':
-    return [_box((0, 0, 0), (rng.uniform(0.06, 0.12), t, h))]
+    return [box((0, 0, 0), (rng.uniform(0.06, 0.12), t, h))]
   a, b = rng.uniform(0.05, 0.1), rng.uniform(0.05, 0.1)  # arm lengths
   if kind == 'ell':
-    return [_box((a / 2, t / 2, 0), (a, t, h)), _box((t / 2, t + (b - t) / 2, 0), (t, b - t, h))]
+    return [box((a / 2, t / 2, 0), (a, t, h)), box((t / 2, t + (b - t) / 2, 0), (t, b - t, h))]
   if kind == 'tee':
-    return [_box((0, 0, 0), (a, t, h)), _box((0, -t / 2 - (b - t) / 2, 0), (t, b - t, h))]
+    return [box((0, 0, 0), (a, t, h)), box((0, -t / 2 - (b - t) / 2, 0), (t, b - t, h))]
   if kind == 'u':
-    base = _box((0, 0, 0), (a, t, h))
-    arms = [_box((s * (a - t) / 2, t / 2 + (b - t) / 2, 0), (t, b - t, h)) for s in (-1, 1)]
+    base = box((0, 0, 0), (a, t, h))
+    arms = [box((s * (a - t) / 2, t / 2 + (b - t) / 2, 0), (t, b - t, h)) for s in (-1, 1)]
     return [base] + arms
   if kind == 'ring':  # a square frame: four walls
     side = max(a, 3 * t + 0.02)
     inner = (side - t) / 2
-    return [_box((0, s * inner, 0), (side, t, h)) for s in (-1, 1)] + [
-        _box((s * inner, 0, 0), (t, side - 2 * t, h)) for s in (-1, 1)]
+    return [box((0, s * inner, 0), (side, t, h)) for s in (-1, 1)] + [
+        box((s * inner, 0, 0), (t, side - 2 * t, h)) for s in (-1, 1)]
   raise ValueError(f'unknown kind {kind!r}; known: {", ".join(KINDS)}')
 
 

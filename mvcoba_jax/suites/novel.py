@@ -47,12 +47,8 @@ def packed(members: list[str], seed: int) -> str:
   gap, parts, y = rng.uniform(*arrangements.GAP), [], 0.0
   for _ in range(rng.integers(2, 4)):
     names = [members[i] for i in rng.integers(len(members), size=rng.integers(2, 5))]
-    cursor, depth = 0.0, 0.0
-    for name in names:
-      size = arrangements.footprint(name)
-      parts.append((name, cursor + 0.5 * size[0], y + 0.5 * size[1], 0.0, 0.0))
-      cursor, depth = cursor + size[0] + gap, max(depth, size[1])
-    y += depth + gap
+    row, depth = arrangements.row(rng, names, y, gap, turns=False)
+    parts, y = parts + row, y + depth + gap
   placed = arrangements.placed(parts, rng, generate.FAMILY_HALF)
   start = int(rng.integers(10))
   return generate.HEADER + ''.join(
