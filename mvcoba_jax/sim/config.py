@@ -13,7 +13,7 @@ import importlib.util
 import math
 import typing
 
-from mvcoba_jax.sim import shapes
+from mvcoba_jax.sim import meshes, shapes
 from mvcoba_jax.sim.errors import Error
 
 BACKENDS = ('auto', 'native', 'mjx', 'warp')
@@ -198,7 +198,7 @@ class SceneConfig:
     try:
       pool = tuple((shapes.reference(n), c) for n, c in self.pool)
       extents = [shapes.shape(name).rest_extent for name, _ in pool]
-    except shapes.meshes.MeshError as e:
+    except meshes.MeshError as e:
       raise ConfigError(f'scene.pool: {e}') from None
     names = [name for name, _ in pool]
     if len(set(names)) < len(names) or not self.num_slots:

@@ -121,10 +121,6 @@ def _convex_hull(vertices: np.ndarray, where):
   return hull
 
 
-def _hull_volume(vertices: np.ndarray, where) -> float:
-  return float(_convex_hull(vertices, where).volume)
-
-
 def _hull(vertices: np.ndarray, where: str) -> np.ndarray:
   """The hull vertices of a point set, at most MAX_PART_VERTICES of them (farthest-point
   sampling, which keeps the extremes); MeshError if the points span no volume."""
@@ -170,7 +166,7 @@ def _file_parts(path: pathlib.Path) -> list[np.ndarray]:
   """One part for a closed mesh that fills its hull (convex but for rounding), else CoACD's."""
   mesh = _read(path)
   vertices = np.asarray(mesh.vertices, np.float64)
-  hull_volume = _hull_volume(vertices, path)  # a flat file is refused before CoACD thickens it
+  hull_volume = _convex_hull(vertices, path).volume  # a flat file is refused before CoACD
   if mesh.is_watertight and abs(mesh.volume) >= 0.98 * hull_volume:
     return [vertices]
   return _split(path, mesh)
