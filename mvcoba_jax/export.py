@@ -244,9 +244,10 @@ def export(workdir, out, results=(), commit: str | None = None,
   """Writes params.npz, model.json and model.onnx of the latest checkpoint of `workdir` to `out`;
   model.json carries the figures of the `results` files' rows for these parameters (`figures`)
   and `commit`, the code that trained it, when given. An `out` holding an export is refused
-  unless `overwrite`; the folder is held (`folders.claim`) while it is written, and its three
-  files are replaced at once (`folders.replace_whole`): a kill or a full disk leaves the old
-  export or the new one, never a mix.
+  unless `overwrite` (checked again once the folder is held: of two exports into one new folder
+  at once, the later is refused); the folder is held (`folders.claim`) from then until its three
+  files are replaced at once (`folders.replace_whole`, into the folder a link names): a kill or a
+  full disk leaves the old export or the new one, never a mix.
 
   Raises PolicyError for a checkpoint or results that cannot serve, or an `out` that cannot be
   written, before anything is written.
@@ -259,9 +260,11 @@ def export(workdir, out, results=(), commit: str | None = None,
   measured = figures(results, model)
   flat = flat_params(model)
   proto = onnx_model(config, model)
-  try:  # held while written; an export it holds is kept until the new one replaces it whole
-    out = folders.claim(out, EXPORT_FILES, keep=True, keep_flag=None)
+  try:  # held from here to the exchange; checked again, as another export may have ended since
+    out = folders.claim(out)
+    folders.check(out, EXPORT_FILES, overwrite=overwrite, keep_flag=None)
   except folders.FolderError as e:
+    folders.release(out)
     raise PolicyError(str(e)) from None
   try:
     buffer = io.BytesIO()
@@ -272,8 +275,9 @@ def export(workdir, out, results=(), commit: str | None = None,
                                 'model.json': model_json.encode(),
                                 'model.onnx': proto.SerializeToString()})
   except OSError as e:
-    raise PolicyError(f'{out}: cannot write the export ({e.strerror}); what it held is kept'
-                      ) from None
+    where = f'{e.filename}: ' if e.filename else ''
+    raise PolicyError(f'{out}: cannot write the export ({where}{e.strerror or e}); what it held '
+                      'is kept') from None
   except ValueError as e:  # a non-finite number in model.json
     raise PolicyError(f'{workdir}: model.json would hold {e}') from None
   finally:

@@ -1,15 +1,16 @@
 """Output folders that commands write: one process at a time, and nothing replaced unasked.
 
-A command takes `claim(folder, ...)` before it writes there: the folder is created, locked for
-the life of the process (an advisory `fcntl` lock on `.lock`, released by the kernel however
-the process ends, so a killed run leaves no stale lock), and refused when it holds results of an
-earlier invocation that the command would replace, unless the user said so.
+A command takes `claim(folder, ...)` before it writes there: the folder is created (where a link
+names it), locked for the life of the process (an advisory `fcntl` lock on `.lock`, released by
+the kernel however the process ends, so a killed run leaves no stale lock), and refused when it
+holds results of an earlier invocation that the command would replace, unless the user said so.
 """
 from __future__ import annotations
 
 import ctypes
 import errno
 import fcntl
+import glob
 import os
 import pathlib
 import shutil
@@ -33,8 +34,8 @@ def check(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: 
   path = pathlib.Path(folder)
   if path.exists() and not path.is_dir():
     raise FolderError(f'{path} is a file, not a folder')
-  if not path.is_dir():  # it would be made: its nearest existing parent must take it
-    parent = next(p for p in path.absolute().parents if p.exists())
+  if not path.is_dir():  # it would be made (where a link points): its nearest parent must take it
+    parent = next(p for p in path.resolve().parents if p.exists())
     if not parent.is_dir():
       raise FolderError(f'{path}: {parent} is a file, not a folder')
     _writable(parent, path)
@@ -67,7 +68,7 @@ def claim(folder, earlier: tuple[str, ...] = (), keep: bool = False, overwrite: 
   `keep`) the `earlier` files it holds are deleted first."""
   path = check(folder, earlier, keep, overwrite, keep_flag)
   try:
-    path.mkdir(parents=True, exist_ok=True)
+    path.resolve().mkdir(parents=True, exist_ok=True)
   except OSError as e:
     raise FolderError(f'{path}: {e.strerror}') from None
   key = path.resolve()
@@ -116,19 +117,32 @@ def release(folder) -> None:
 def replace_whole(folder, contents: dict[str, bytes]) -> None:
   """Writes `contents` (file name -> bytes) as `folder`'s new whole set of those files, at once:
   they go to a staging folder beside it (on the same file system, with every other entry of the
-  folder copied in), which is then exchanged with `folder` by one atomic rename (Linux's
-  renameat2 RENAME_EXCHANGE; elsewhere two renames, a window of microseconds). A kill or a full
-  disk at any moment leaves `folder` holding the old set or the new one, never a mix. OSError
-  when writing fails, with `folder` untouched and the staging folder removed."""
-  folder = pathlib.Path(folder).absolute()
+  folder copied in and its lock file linked, so the lock the caller holds stays on the folder),
+  which is then exchanged with `folder` by one atomic rename (Linux's renameat2 RENAME_EXCHANGE;
+  elsewhere two renames, a window of microseconds). A kill or a full disk at any moment leaves
+  `folder` holding the old set or the new one, never a mix; the staging folders a killed writer
+  left are removed by the next. A symbolic link is followed: the folder it names is replaced.
+  The caller holds the folder (`claim`). OSError when writing fails, with `folder` untouched and
+  the staging folder removed."""
+  folder = pathlib.Path(folder).resolve()
+  for left in folder.parent.glob(f'.{glob.escape(folder.name)}.staging-*'):
+    if not _alive(left.name.rpartition('-')[2]):
+      shutil.rmtree(left, ignore_errors=True)
   staging = folder.with_name(f'.{folder.name}.staging-{os.getpid()}')
   shutil.rmtree(staging, ignore_errors=True)
   try:
     staging.mkdir()
     for entry in (folder.iterdir() if folder.is_dir() else ()):
-      if entry.name in contents or entry.name == LOCK_NAME:
+      if entry.name in contents:
         continue
-      (shutil.copytree if entry.is_dir() else shutil.copy2)(entry, staging / entry.name)
+      if entry.name == LOCK_NAME:
+        os.link(entry, staging / entry.name)
+      elif entry.is_dir() and not entry.is_symlink():
+        shutil.copytree(entry, staging / entry.name, symlinks=True)
+      elif entry.is_file() or entry.is_symlink():
+        shutil.copy2(entry, staging / entry.name, follow_symlinks=False)
+      else:
+        raise OSError(errno.EINVAL, 'not a file, folder or link, which cannot be kept', str(entry))
     for name, data in contents.items():
       with open(staging / name, 'wb') as f:
         f.write(data)
@@ -140,6 +154,19 @@ def replace_whole(folder, contents: dict[str, bytes]) -> None:
       os.rename(staging, folder)
   finally:
     shutil.rmtree(staging, ignore_errors=True)
+
+
+def _alive(pid: str) -> bool:
+  """Whether the process of this id (a staging folder's suffix) runs; False for no number."""
+  if not pid.isdigit():
+    return False
+  try:
+    os.kill(int(pid), 0)
+  except ProcessLookupError:
+    return False
+  except OSError:  # another user's process
+    return True
+  return True
 
 
 _RENAME_EXCHANGE = 2

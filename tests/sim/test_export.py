@@ -335,8 +335,27 @@ def test_an_export_is_never_replaced_unasked(run, exported, tmp_path, capsys):
   assert (folder / 'model.json').read_text() == '{"kept": true}'
   assert export_cli.main([*args, '--overwrite']) == 0
   assert json.loads((folder / 'model.json').read_text())['source']['checkpoint_step'] == 8
-  assert sorted(p.name for p in folder.iterdir()) == ['model.json', 'model.onnx', 'params.npz']
+  assert sorted(p.name for p in folder.iterdir()) == ['.lock', 'model.json', 'model.onnx',
+                                                       'params.npz']
   assert not list(tmp_path.glob('.shipped.*'))  # no staging folder left
+
+
+def test_an_export_that_ends_while_another_converts_is_not_replaced(run, tmp_path, monkeypatch):
+  """Two exports into one new folder at once: the one that finds the other's export there when
+  it comes to write (after its own check and conversion) is refused, and the other's stays."""
+  folder, real_load, others = tmp_path / 'new', export.load, []
+
+  def another_export_ends_meanwhile(workdir):
+    if not others:  # the other process, ending between this one's first check and its write
+      others.append(workdir)
+      export.export(workdir, folder)
+    return real_load(workdir)
+
+  monkeypatch.setattr(export, 'load', another_export_ends_meanwhile)
+  with pytest.raises(policy.PolicyError, match='holds results of an earlier run'):
+    export.export(run[1], folder)
+  written = json.loads((folder / 'model.json').read_text())
+  assert others and written['source']['checkpoint_step'] == 8
 
 
 def test_replacing_an_export_leaves_the_old_or_the_new_never_a_mix(run, exported, tmp_path,

@@ -1,6 +1,7 @@
 """Output folders: one process at a time, nothing replaced unasked, and the commands' refusals,
 all before anything is compiled."""
 import json
+import os
 import subprocess
 import sys
 import time
@@ -98,6 +99,40 @@ def test_a_results_file_that_cannot_be_written_leaves_the_earlier_one(tmp_path):
   assert 'results.json (File too large); the earlier one is intact' in out.stdout, out.stderr
   assert (tmp_path / 'results.json').read_text() == '{"earlier": 1}'
   assert not list(tmp_path.glob('.*.partial'))
+
+
+def test_a_folder_replaced_whole_stays_held_follows_its_link_and_clears_dead_staging(tmp_path):
+  """The exchange keeps the writer's lock on the folder (another process is refused until the
+  writer ends), writes into the folder a link names (the link stays), removes the staging folder
+  a killed writer left, and refuses a FIFO it cannot keep in one OSError that names it."""
+  real, link = tmp_path / 'real', tmp_path / 'link'
+  link.symlink_to(real, target_is_directory=True)
+  (tmp_path / '.real.staging-999999999').mkdir()  # a dead writer's: no such process
+  probe = ('from mvcoba_jax import folders\ntry:\n'
+           f'  folders.check({str(link)!r})\n  print("free")\n'
+           'except folders.FolderError as e:\n  print(e)\n')
+  folders.claim(link)
+  try:
+    folders.replace_whole(link, {'model.json': b'1'})
+    folders.replace_whole(link, {'model.json': b'2'})
+    held = subprocess.run([sys.executable, '-c', probe], capture_output=True, text=True,
+                          timeout=120).stdout
+  finally:
+    folders.release(link)
+  assert 'in use by another mvcoba-jax process' in held
+  assert link.is_symlink() and (real / 'model.json').read_bytes() == b'2'
+  assert sorted(p.name for p in tmp_path.iterdir()) == ['link', 'real']
+  os.mkfifo(real / 'pipe')
+  folders.claim(real)
+  try:
+    with pytest.raises(OSError, match='not a file, folder or link') as e:
+      folders.replace_whole(real, {'model.json': b'3'})
+  finally:
+    folders.release(real)
+  assert e.value.filename == str(real / 'pipe') and (real / 'model.json').read_bytes() == b'2'
+  assert sorted(p.name for p in tmp_path.iterdir()) == ['link', 'real']
+  assert subprocess.run([sys.executable, '-c', probe], capture_output=True, text=True,
+                        timeout=120).stdout.strip() == 'free'
 
 
 @pytest.mark.parametrize('blocks, says', [
