@@ -22,8 +22,10 @@ import sys
 
 import numpy as np
 import onnxruntime as ort
+from onnxruntime.capi import onnxruntime_pybind11_state as ort_errors
 
 from mvcoba_jax.deploy import DeployError, model_file
+from mvcoba_jax.deploy.policy import check_graph
 from mvcoba_jax.deploy.heightmaps import filled
 from mvcoba_jax.sim.contract import pixel_to_world, push_length
 
@@ -38,36 +40,32 @@ def choose(session: ort.InferenceSession, color: np.ndarray, depth: np.ndarray,
           'value': float(value[0])}
 
 
-def to_world(action: dict, depth: np.ndarray, model: dict) -> dict:
-  """Adds angle, the world point (x, y, z) of the action, per model.json 'pixel_to_world', and
-  how far a push slides (the length it trained with, cut at the workspace's edge as the simulator
+def to_world(action: dict, depth: np.ndarray, spec: model_file.ModelFile) -> dict:
+  """Adds angle, the world point (x, y, z) of the action (`sim.contract.pixel_to_world`), and how
+  far a push slides (the length it trained with, cut at the workspace's edge as the simulator
   cuts it: `sim.contract.push_length`; 0 for a grasp)."""
-  hm = model['heightmap']
-  res, half = hm['resolution_m'], hm['workspace_half_m']
-  row, col = action['row'], action['col']
-  names = {v: k for k, v in model['primitives'].items()}
-  angle = model['rotations']['angles_rad'][action['rotation']]
-  x, y = pixel_to_world(row, col, res, half)
-  push = action['primitive'] == model['primitives']['push']
-  return {'primitive_name': names[action['primitive']], **action, 'angle_rad': angle, 'x': x,
-          'y': y, 'z': float(depth[hm['views_used'], row, col].max()),
-          'push_length_m': float(push_length((x, y), angle, model['config']['env'][
-              'push_length'], half)) if push else 0.0}
+  half, row, col = spec.workspace_half_m, action['row'], action['col']
+  angle = spec.angles_rad[action['rotation']]
+  x, y = pixel_to_world(row, col, spec.resolution_m, half)
+  push = action['primitive'] == spec.push
+  return {'primitive_name': 'push' if push else 'grasp', **action, 'angle_rad': angle, 'x': x,
+          'y': y, 'z': float(depth[list(spec.views_used), row, col].max()),
+          'push_length_m': float(push_length((x, y), angle, spec.push_length_m, half)) if push
+          else 0.0}
 
 
-def load_state(path: pathlib.Path, model: dict, fill_unseen: bool = False
-               ) -> tuple[np.ndarray, np.ndarray]:
-  """(color, depth) of state.npz, checked against the model's input shapes; for a policy trained
-  with `perception.fill_unseen`, each view's unseen cells filled from the others as training
-  did, which needs the state's `seen` (V, R, R) booleans."""
+def load_state(path: pathlib.Path, spec: model_file.ModelFile) -> tuple[np.ndarray, np.ndarray]:
+  """(color, depth) of state.npz, checked against the policy's views and grid; for a policy
+  trained with `perception.fill_unseen`, each view's unseen cells filled from the others as
+  training did, which needs the state's `seen` (V, R, R) booleans."""
   with np.load(path) as data:
     color, depth = (np.asarray(data[k], np.float32) for k in ('color', 'depth'))
     seen = np.asarray(data['seen'], bool) if 'seen' in data else None
-  for name, array in (('color', color), ('depth', depth)):
-    want = next(i['shape'][1:] for i in model['onnx']['inputs'] if i['name'] == name)
+  grid = [spec.num_views, spec.grid_size, spec.grid_size]
+  for name, array, want in (('color', color, [*grid, 3]), ('depth', depth, grid)):
     if list(array.shape) != want:
       raise ValueError(f'{path}: {name} has shape {list(array.shape)}, the model wants {want}')
-  if fill_unseen:
+  if spec.fill_unseen:
     if seen is None or seen.shape != depth.shape:
       raise ValueError(f'{path}: this policy fills unseen cells and needs seen, booleans of the '
                        f'depth\'s shape {list(depth.shape)}')
@@ -86,16 +84,17 @@ def main(argv=None) -> int:
     spec = model_file.read(args.model)  # checked: format, grid, views, rotations
     if not spec.graph_decides:
       raise DeployError(f'{args.model}: an export whose graph leaves the rule out; export again')
-    model = spec.raw
-    color, depth = load_state(args.state, model, spec.fill_unseen)
-  except (OSError, KeyError, ValueError, DeployError) as e:
-    print(f'error: {e}', file=sys.stderr)
+    color, depth = load_state(args.state, spec)
+    options = ort.SessionOptions()
+    options.log_severity_level = 3  # the converter's loose shape annotations only warn
+    onnx_file = args.model / spec.onnx_file
+    session = ort.InferenceSession(str(onnx_file), options, providers=['CPUExecutionProvider'])
+    check_graph(session, spec, onnx_file)  # names, types and shapes as model.json says
+  except (OSError, KeyError, ValueError, DeployError, ort_errors.Fail,
+          ort_errors.InvalidGraph, ort_errors.InvalidProtobuf, ort_errors.NoSuchFile) as e:
+    print(f'error: {str(e)[:300]}', file=sys.stderr)
     return 2
-  options = ort.SessionOptions()
-  options.log_severity_level = 3  # the converter's loose shape annotations only warn
-  session = ort.InferenceSession(str(args.model / model['onnx']['file']), options,
-                                 providers=['CPUExecutionProvider'])
-  action = to_world(choose(session, color, depth, bool(args.changed)), depth, model)
+  action = to_world(choose(session, color, depth, bool(args.changed)), depth, spec)
   print(json.dumps(action))
   return 0
 

@@ -13,6 +13,7 @@ import pathlib
 
 from mvcoba_jax.deploy.calibration import DeployError
 from mvcoba_jax.deploy.heightmaps import BELOW_TABLE, HEIGHT_UNIT
+from mvcoba_jax.sim.contract import GRASP, PUSH
 
 FORMAT = 'mvcoba-jax-export/2'  # what export writes: the graph outputs the action
 # Format 1's graph stopped at the maps and left the rule to the runtime: its parameters still
@@ -112,8 +113,9 @@ def read(folder) -> ModelFile:
                       '(another version of mvcoba_jax wrote it)')
   got = {name: field.get(dotted, kind, bounds, ABSENT.get(name, _REQUIRED))
          for name, (dotted, kind, bounds) in FIELDS.items()}
-  if got['push'] == got['grasp']:
-    raise DeployError(f'{path}: primitives.push and primitives.grasp are both {got["push"]}')
+  if (got['push'], got['grasp']) != (PUSH, GRASP):
+    raise DeployError(f'{path}: primitives push {got["push"]}, grasp {got["grasp"]}: the graph\'s '
+                      f'action numbers push {PUSH} and grasp {GRASP} (its maps\' order)')
   angles = got['angles_rad']
   if len(angles) != got['num_rotations'] or not all(_real(a) for a in angles):
     raise DeployError(f'{path}: rotations.angles_rad: {got["num_rotations"]} finite numbers '

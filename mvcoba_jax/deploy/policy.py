@@ -64,6 +64,30 @@ def check_gripper(trained: dict, robot: str | dict, folder) -> None:
                       '(--other-gripper)')
 
 
+def check_graph(session, spec: model_file.ModelFile, onnx_file) -> None:
+  """DeployError unless an onnxruntime session's graph reads and writes what model.json
+  describes: inputs color (1, V, R, R, 3) and depth (1, V, R, R) float32 and changed (1,) bool,
+  outputs action (1, 4) int32 and value (1,) float32, for its V views and R x R grid (a free
+  dimension fits any size)."""
+  v, r = spec.num_views, spec.grid_size
+  needs = {'input': {'color': ('tensor(float)', [1, v, r, r, 3]),
+                     'depth': ('tensor(float)', [1, v, r, r]), 'changed': ('tensor(bool)', [1])},
+           'output': {'action': ('tensor(int32)', [1, 4]), 'value': ('tensor(float)', [1])}}
+  for kind, has in (('input', session.get_inputs()), ('output', session.get_outputs())):
+    named = {n.name: n for n in has}
+    missing = sorted(set(needs[kind]) - set(named))
+    extra = sorted(set(named) - set(needs[kind])) if kind == 'input' else []
+    if missing or extra:
+      raise DeployError(f'{onnx_file}: the graph\'s {kind}s are {", ".join(sorted(named))}; an '
+                        f'export\'s are {", ".join(needs[kind])}{" and more" * (kind == "output")}')
+    for name, (dtype, shape) in needs[kind].items():
+      got = list(named[name].shape)
+      if named[name].type != dtype or len(got) != len(shape) or any(
+          isinstance(g, int) and g != s for g, s in zip(got, shape)):
+        raise DeployError(f'{onnx_file}: {kind} {name} is {named[name].type} {got}; model.json '
+                          f'({v} views, a {r} x {r} grid) needs {dtype} {shape}')
+
+
 class OnnxPolicy:
   """model.json and model.onnx of an export: the graph's greedy action on a state, given whether
   the last action changed the scene, as `examples/onnx_infer.py` runs it. `failed_grasp_changes`
@@ -96,6 +120,7 @@ class OnnxPolicy:
                                           providers=['CPUExecutionProvider'])
     except Exception as e:  # noqa: BLE001 (onnxruntime raises its own kinds)
       raise DeployError(f'{onnx_file}: cannot load the network ({str(e)[:160]})') from None
+    check_graph(self.session, self.spec, onnx_file)
 
   @property
   def gripper(self) -> dict:

@@ -7,6 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
+# The primitives' numbers: the order of the networks' maps and of the exported graph's action.
+PUSH, GRASP = 0, 1
+
 
 def push_length(start, angle, length, half, xp=np):
   """How far a push from `start` (x, y) along `angle` (both in the workspace frame) slides, up to

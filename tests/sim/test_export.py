@@ -443,8 +443,9 @@ def test_every_shipped_policy_evaluates(tmp_path):
 
 def test_shipped_example_state_is_an_input_of_the_shipped_policy():
   """pretrained/example-state.npz is what the docs run examples/onnx_infer.py on."""
-  model = json.loads((ROOT / 'pretrained' / 'mvcoba' / 'model.json').read_text())
-  color, depth = _example().load_state(ROOT / 'pretrained' / 'example-state.npz', model)
+  from mvcoba_jax.deploy import model_file
+  spec = model_file.read(ROOT / 'pretrained' / 'mvcoba')
+  color, depth = _example().load_state(ROOT / 'pretrained' / 'example-state.npz', spec)
   assert 0.0 <= color.min() and color.max() <= 1.0 and 0.02 < depth.max() < 0.2
 
 

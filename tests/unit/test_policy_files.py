@@ -1,6 +1,7 @@
 """Damaged or mismatched policy files (a training checkpoint, an exported folder) fail with one
 PolicyError naming the file and what is wrong, never a traceback from NumPy, Orbax or JAX."""
 import json
+import pathlib
 import shutil
 
 import jax
@@ -218,3 +219,66 @@ def test_a_tabletop_takes_the_scene_and_episode_alone():
   from mvcoba_jax.sim.tabletop import Tabletop
   with pytest.raises(TypeError, match='TabletopConfig'):
     Tabletop(resolve('tiny'))
+
+
+def _constant_graph(folder, inputs, outputs):
+  """A model.onnx whose outputs are constants: (name, onnx type, shape) for each input and
+  output, so an export's graph can be given any names, types and shapes."""
+  import onnx  # noqa: PLC0415 (a dev extra)
+  from onnx import TensorProto, helper  # noqa: PLC0415
+
+  types = {'float': TensorProto.FLOAT, 'bool': TensorProto.BOOL, 'int32': TensorProto.INT32}
+  values = {'float': np.float32, 'bool': np.bool_, 'int32': np.int32}
+  nodes = [helper.make_node('Constant', [], [name], value=onnx.numpy_helper.from_array(
+      np.zeros(shape, values[kind]))) for name, kind, shape in outputs]
+  graph = helper.make_graph(
+      nodes, 'constant', [helper.make_tensor_value_info(n, types[k], s) for n, k, s in inputs],
+      [helper.make_tensor_value_info(n, types[k], s) for n, k, s in outputs])
+  onnx.save(helper.make_model(graph, opset_imports=[helper.make_opsetid('', 17)]),
+            folder / 'model.onnx')
+
+
+EXPORT_INPUTS = [('color', 'float', [1, 2, 112, 112, 3]), ('depth', 'float', [1, 2, 112, 112]),
+                 ('changed', 'bool', [1])]
+EXPORT_OUTPUTS = [('action', 'int32', [1, 4]), ('value', 'float', [1])]
+
+
+@pytest.mark.parametrize('inputs, outputs, says', [
+    (EXPORT_INPUTS, EXPORT_OUTPUTS, None),
+    (EXPORT_INPUTS, [('action', 'int32', [1, 4]), ('score', 'float', [1])],
+     "the graph's outputs are action, score; an export's are action, value and more"),
+    ([*EXPORT_INPUTS, ('extra', 'float', [1])], EXPORT_OUTPUTS,
+     "the graph's inputs are changed, color, depth, extra"),
+    ([('colour', 'float', [1, 2, 112, 112, 3]), *EXPORT_INPUTS[1:]], EXPORT_OUTPUTS,
+     "the graph's inputs are changed, colour, depth"),
+    ([EXPORT_INPUTS[0], ('depth', 'float', [1, 2, 96, 96]), EXPORT_INPUTS[2]], EXPORT_OUTPUTS,
+     r'input depth is tensor\(float\) \[1, 2, 96, 96\]; model.json \(2 views, a 112 x 112 grid\)'),
+    ([*EXPORT_INPUTS[:2], ('changed', 'float', [1])], EXPORT_OUTPUTS,
+     r'input changed is tensor\(float\) \[1\]; .* needs tensor\(bool\) \[1\]'),
+    (EXPORT_INPUTS, [('action', 'float', [1, 4]), EXPORT_OUTPUTS[1]],
+     r'output action is tensor\(float\)'),
+])
+def test_an_exported_graph_is_checked_against_model_json(tmp_path, inputs, outputs, says):
+  """Opening an export refuses, in one line naming the file, a graph whose inputs or outputs
+  (names, element types, shapes) are not the ones model.json's policy needs."""
+  from mvcoba_jax.deploy import DeployError, OnnxPolicy  # noqa: PLC0415
+  shutil.copy('pretrained/mvcoba/model.json', tmp_path / 'model.json')
+  _constant_graph(tmp_path, inputs, outputs)
+  if says is None:
+    policy_ = OnnxPolicy(tmp_path)
+    zeros = np.zeros((2, 112, 112), np.float32)
+    assert policy_.choose(zeros[..., None].repeat(3, -1), zeros, True) == (0, 0, 0, 0, 0.0)
+    return
+  with pytest.raises(DeployError, match=f'{tmp_path / "model.onnx"}: {says}'):
+    OnnxPolicy(tmp_path)
+
+
+def test_model_json_with_primitives_swapped_is_refused(tmp_path):
+  """A model.json that numbers grasp 0 would relabel the graph's grasps as pushes."""
+  from mvcoba_jax.deploy import DeployError, model_file  # noqa: PLC0415
+  described = json.loads(pathlib.Path('pretrained/mvcoba/model.json').read_text())
+  described['primitives'] = {'push': 1, 'grasp': 0}
+  (tmp_path / 'model.json').write_text(json.dumps(described))
+  with pytest.raises(DeployError, match='primitives push 1, grasp 0: the graph\'s action numbers '
+                                        'push 0 and grasp 1'):
+    model_file.read(tmp_path)
