@@ -18,7 +18,7 @@ from tqdm import tqdm
 
 from mvcoba_jax import config as config_lib
 from mvcoba_jax import runtime
-from mvcoba_jax.sim import primitives
+from mvcoba_jax.sim import physics, primitives
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.sim.primitives import Action
 from mvcoba_jax.sim.tabletop import Tabletop
@@ -50,6 +50,9 @@ def main(argv=None) -> int:
     config = config_lib.from_arguments(args)
   except config_lib.ConfigError as e:
     parser.error(str(e))
+  problem = physics.device_problem(config.scene)
+  if problem:  # as training refuses it
+    parser.error(problem)
   runtime.setup()
   env = Tabletop(config.tabletop)
   b = config.num_envs

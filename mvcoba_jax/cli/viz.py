@@ -18,6 +18,7 @@ import jax
 from mvcoba_jax import config as config_lib
 from mvcoba_jax import folders, methods, runtime
 from mvcoba_jax.learner.task import Task
+from mvcoba_jax.sim import physics
 from mvcoba_jax.sim.scenarios import ScenarioError, case_to_layout, read_case
 from mvcoba_jax.suites.cases import pool_for, suite_config
 from mvcoba_jax.viz import save_state, write_pictures
@@ -48,6 +49,8 @@ def main(argv=None) -> int:
   try:
     config = config_lib.from_arguments(args)
     scene = config.scene
+    if physics.device_problem(scene):  # as training refuses it
+      raise config_lib.ConfigError(physics.device_problem(scene))
     case = read_case(args.case, scene.workspace_half, scene.workspace_top, args.blocks)
     # the slots the case needs
     task = Task.build(suite_config(config, pool_for([case])),

@@ -20,6 +20,7 @@ from mvcoba_jax.evaluation import sources as sources_lib
 from mvcoba_jax.evaluation.protocols import FROZEN, PROTOCOLS, Protocol
 from mvcoba_jax.learner.task import Task
 from mvcoba_jax.policy import PolicyError
+from mvcoba_jax.sim import physics
 from mvcoba_jax.sim.scenarios import MAX_FIT_BOUND, ScenarioError, case_to_layout, stack_layouts
 from mvcoba_jax.suites import cases as suite_cases
 from mvcoba_jax.suites import loading, suite_files
@@ -114,9 +115,13 @@ def evaluate(spec: EvalSpec) -> dict:
     files_of = suite_files(list(spec.suites))
     check_work(spec.runs, spec.max_actions, files_of)  # before the cases are read and settled
     base = config_lib.resolve(spec.config, spec.overrides)
-    suites = loading.load(files_of, base, spec.blocks, spec.fit_overlaps, spec.allow_bad_cases)
     sources = ([sources_lib.trained(path, spec.overrides) for path in spec.checkpoints]
                + ([sources_lib.baseline(spec.baseline)] if spec.baseline else []))
+    problem = next(filter(None, (physics.device_problem(c.scene) for c in
+                                 [base, *(s.config for s in sources if s.config)])), None)
+    if problem:  # as training refuses it
+      raise EvaluationError(problem)
+    suites = loading.load(files_of, base, spec.blocks, spec.fit_overlaps, spec.allow_bad_cases)
     names = [s.name for s in sources]
     labels = (report_lib.row_labels(list(spec.checkpoints), names[:len(spec.checkpoints)])
               + names[len(spec.checkpoints):])

@@ -1,6 +1,7 @@
 """Configs are checked when built: presets, `--set` overrides and saved dicts go through the same
 field and relation checks, and a bad value is refused with the key and what it allows."""
 import dataclasses
+import pathlib
 import random
 import re
 import typing
@@ -246,11 +247,17 @@ def test_saved_config_without_the_winning_policy_fields_keeps_the_papers_rule():
   assert config.perception.failed_grasp_changes and defaulted(saved, config) == {}
 
 
-def test_warp_without_a_cuda_device_is_refused_unless_forced(tmp_path, monkeypatch):
-  """The gpu preset on a machine where Warp finds no CUDA device (every CI machine): training is
-  refused in one line naming the CPU's preset, before anything compiles or is written; the
-  environment variable runs it all the same; native MuJoCo is never refused."""
+def test_warp_without_a_cuda_device_is_refused_unless_forced(tmp_path, monkeypatch, capsys):
+  """The gpu preset on a machine where Warp finds no CUDA device (every CI machine): training,
+  evaluation, the demo and the pictures are refused in one line naming the CPU's preset, before
+  anything compiles or is written; the environment variable runs it all the same; native MuJoCo
+  is never refused."""
   import warp
+
+  from mvcoba_jax import suites
+  from mvcoba_jax.cli import demo as demo_cli
+  from mvcoba_jax.cli import eval as eval_cli
+  from mvcoba_jax.cli import viz as viz_cli
 
   from mvcoba_jax.learner.train import TrainError, train
   from mvcoba_jax.sim import physics
@@ -263,6 +270,17 @@ def test_warp_without_a_cuda_device_is_refused_unless_forced(tmp_path, monkeypat
   with pytest.raises(TrainError, match='Warp finds no CUDA device here'):
     train(resolve('tiny', ['scene.backend=warp']), tmp_path / 'run')
   assert not (tmp_path / 'run').exists()
+  case = sorted(pathlib.Path(suites.__file__).parent.joinpath('isolated').iterdir())[0]
+  for main, argv in ((eval_cli.main, ['--baseline', 'heuristic', '--suite', str(case), '--out',
+                                      str(tmp_path / 'eval')]),
+                     (viz_cli.main, [str(case), '--out', str(tmp_path / 'viz')]),
+                     (demo_cli.main, [])):
+    try:
+      code = main([*argv, '--config', 'gpu'])
+    except SystemExit as e:  # argparse's error
+      code = e.code
+    assert code == 2 and 'Warp finds no CUDA device here' in capsys.readouterr().err, main
+  assert not (tmp_path / 'eval').exists() and not (tmp_path / 'viz').exists()
   monkeypatch.setenv(physics.FORCE_WARP_CPU, '1')
   assert physics.device_problem(gpu.scene) is None
 
