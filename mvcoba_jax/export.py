@@ -31,7 +31,7 @@ from mvcoba_jax import folders, methods, perception
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Config
 from mvcoba_jax.learner import agent, networks
-from mvcoba_jax.deploy import model_file
+from mvcoba_jax.deploy import DeployError, model_file
 from mvcoba_jax.deploy.heightmaps import BELOW_TABLE, HEIGHT_UNIT
 from mvcoba_jax.policy import PolicyError, fingerprint, flat_params, load
 from mvcoba_jax.sim import shapes
@@ -249,7 +249,8 @@ def export(workdir, out, results=(), commit: str | None = None,
   files are replaced at once (`folders.replace_whole`, into the folder a link names): a kill or a
   full disk leaves the old export or the new one, never a mix.
 
-  Raises PolicyError for a checkpoint or results that cannot serve, or an `out` that cannot be
+  Raises PolicyError for a checkpoint or results that cannot serve, a model.json that its
+  readers would refuse (read back through `deploy.model_file` first), or an `out` that cannot be
   written, before anything is written.
   """
   try:
@@ -260,6 +261,14 @@ def export(workdir, out, results=(), commit: str | None = None,
   measured = figures(results, model)
   flat = flat_params(model)
   proto = onnx_model(config, model)
+  try:
+    model_json = json.dumps(describe(config, model.method, flat, step, workdir, commit,
+                                     measured), indent=1, allow_nan=False)
+    model_file.checked(json.loads(model_json), pathlib.Path(out) / 'model.json')  # as read back
+  except DeployError as e:  # a field its readers refuse
+    raise PolicyError(f'{workdir}: its export would be refused by its readers ({e})') from None
+  except ValueError as e:  # a non-finite number
+    raise PolicyError(f'{workdir}: model.json would hold {e}') from None
   try:  # held from here to the exchange; checked again, as another export may have ended since
     out = folders.claim(out)
     folders.check(out, EXPORT_FILES, overwrite=overwrite, keep_flag=None)
@@ -269,8 +278,6 @@ def export(workdir, out, results=(), commit: str | None = None,
   try:
     buffer = io.BytesIO()
     np.savez(buffer, **flat)
-    model_json = json.dumps(describe(config, model.method, flat, step, workdir, commit,
-                                     measured), indent=1, allow_nan=False)
     folders.replace_whole(out, {'params.npz': buffer.getvalue(),
                                 'model.json': model_json.encode(),
                                 'model.onnx': proto.SerializeToString()})
@@ -278,8 +285,6 @@ def export(workdir, out, results=(), commit: str | None = None,
     where = f'{e.filename}: ' if e.filename else ''
     raise PolicyError(f'{out}: cannot write the export ({where}{e.strerror or e}); what it held '
                       'is kept') from None
-  except ValueError as e:  # a non-finite number in model.json
-    raise PolicyError(f'{workdir}: model.json would hold {e}') from None
   finally:
     folders.release(out)
   return {'params': out / 'params.npz', 'model_json': out / 'model.json',

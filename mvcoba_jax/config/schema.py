@@ -16,6 +16,7 @@ from mvcoba_jax.sim.config import (
   TabletopConfig,
   check,
 )
+from mvcoba_jax.sim.contract import RANGES
 
 __all__ = ['CameraConfig', 'Config', 'ConfigError', 'EnvConfig', 'Error', 'GripperConfig',
            'NetworkConfig', 'PerceptionConfig', 'SceneConfig', 'TabletopConfig', 'TrainConfig']
@@ -50,10 +51,9 @@ class PerceptionConfig:
   fill_unseen: bool = False
 
   def __post_init__(self):
-    check(self, 'perception.', {'heightmap_resolution': Between(0.0005, 0.05),
-                                'change_area': Between(0, 1, low_open=True),
-                                'failed_grasp_retries': Between(0, 100),
-                                'change_min': Between(0, 1), 'change_max': Between(0, 1)})
+    check(self, 'perception.', {name: Between(*RANGES[f'perception.{name}']) for name in (
+        'heightmap_resolution', 'change_area', 'failed_grasp_retries', 'change_min',
+        'change_max')})
 
 
 @dataclasses.dataclass(frozen=True)

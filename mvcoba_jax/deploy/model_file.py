@@ -13,7 +13,7 @@ import pathlib
 
 from mvcoba_jax.deploy.calibration import DeployError
 from mvcoba_jax.deploy.heightmaps import BELOW_TABLE, HEIGHT_UNIT
-from mvcoba_jax.sim.contract import GRASP, PUSH
+from mvcoba_jax.sim.contract import GRASP, PUSH, RANGES
 
 FORMAT = 'mvcoba-jax-export/2'  # what export writes: the graph outputs the action
 # Format 1's graph stopped at the maps and left the rule to the runtime: its parameters still
@@ -53,23 +53,24 @@ class ModelFile:
 FIELDS = {
     'push': ('primitives.push', int, (0, 1)),
     'grasp': ('primitives.grasp', int, (0, 1)),
-    'num_rotations': ('rotations.num_rotations', int, (1, 64)),
+    'num_rotations': ('rotations.num_rotations', int, RANGES['env.num_rotations']),
     'angles_rad': ('rotations.angles_rad', list, None),
-    'resolution_m': ('heightmap.resolution_m', float, (1e-4, 0.05)),
-    'workspace_half_m': ('heightmap.workspace_half_m', float, (0.01, 2.0)),
+    'resolution_m': ('heightmap.resolution_m', float, RANGES['perception.heightmap_resolution']),
+    'workspace_half_m': ('heightmap.workspace_half_m', float, RANGES['scene.workspace_half']),
     'grid_size': ('heightmap.grid_size', int, (1, 4096)),
     'num_views': ('heightmap.num_views', int, (1, 16)),
     'views_used': ('heightmap.views_used', list, None),
     'height_unit_m': ('heightmap.height_unit_m', float, (1e-7, 1e-2)),
     'below_table_m': ('heightmap.below_table_m', float, (-0.1, 0.0)),
     'onnx_file': ('onnx.file', str, None),
-    'change_min': ('config.perception.change_min', float, (0.0, 1.0)),
-    'change_max': ('config.perception.change_max', float, (0.0, 1.0)),
-    'change_area': ('config.perception.change_area', float, (0.0, 1.0)),
+    'change_min': ('config.perception.change_min', float, RANGES['perception.change_min']),
+    'change_max': ('config.perception.change_max', float, RANGES['perception.change_max']),
+    'change_area': ('config.perception.change_area', float, RANGES['perception.change_area']),
     'failed_grasp_changes': ('config.perception.failed_grasp_changes', bool, None),
-    'failed_grasp_retries': ('config.perception.failed_grasp_retries', int, (0, 100)),
+    'failed_grasp_retries': ('config.perception.failed_grasp_retries', int,
+                             RANGES['perception.failed_grasp_retries']),
     'fill_unseen': ('config.perception.fill_unseen', bool, None),
-    'push_length_m': ('config.env.push_length', float, (0.001, 1.0)),
+    'push_length_m': ('config.env.push_length', float, RANGES['env.push_length']),
     'gripper': ('config.scene.gripper', dict, None),
 }
 # The RG2-like gripper of every export written before the gripper was a config of its own
@@ -100,12 +101,18 @@ def read(folder) -> ModelFile:
   """The checked model.json of an export folder; DeployError naming the file, the field and the
   problem, for the first field that is missing, mistyped or out of range, an unknown format,
   a heightmap unit or floor this runtime does not make, or an ONNX file outside the folder."""
-  folder = pathlib.Path(folder)
-  path = folder / 'model.json'
+  path = pathlib.Path(folder) / 'model.json'
   try:
     raw = json.loads(path.read_text(), parse_constant=_no_constant)
   except (OSError, ValueError, RecursionError) as e:
     raise DeployError(f'{path}: not an export ({type(e).__name__}: {str(e)[:120]})') from None
+  return checked(raw, path)
+
+
+def checked(raw, path: pathlib.Path) -> ModelFile:
+  """`read`'s checks of model.json's content `raw`, as if read from `path` (errors name it):
+  what the export runs on what it is about to write."""
+  folder = path.parent
   field = _Fields(raw, path)
   fmt = field.get('format', str)
   if fmt not in FORMATS:
@@ -134,10 +141,11 @@ def read(folder) -> ModelFile:
       raise DeployError(f'{path}: {FIELDS[name][0]} {got[name]!r}: this runtime\'s heightmaps '
                         f'use {own!r} (another version of mvcoba_jax wrote it)')
   gripper = got['gripper']
+  low, high = RANGES['scene.gripper.max_opening']
   if not isinstance(gripper.get('name'), str) or not (
-      _real(gripper.get('max_opening')) and 0 < gripper['max_opening'] <= 1):
-    raise DeployError(f'{path}: config.scene.gripper: a name and a max_opening in metres '
-                      'expected')
+      _real(gripper.get('max_opening')) and low <= gripper['max_opening'] <= high):
+    raise DeployError(f'{path}: config.scene.gripper: a name and a max_opening in {low:g}-'
+                      f'{high:g} m expected')
   if (folder / got['onnx_file']).resolve().parent != folder.resolve():
     raise DeployError(f'{path}: onnx.file {got["onnx_file"]!r} lies outside the export\'s folder')
   if abs(field.get('config.perception.heightmap_resolution', float, (1e-4, 0.05)) - res) > 1e-12:

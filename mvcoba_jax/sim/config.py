@@ -14,6 +14,7 @@ import math
 import typing
 
 from mvcoba_jax.sim import meshes, shapes
+from mvcoba_jax.sim.contract import RANGES
 from mvcoba_jax.sim.errors import Error
 
 BACKENDS = ('auto', 'native', 'mjx', 'warp')
@@ -135,7 +136,7 @@ class GripperConfig:
   def __post_init__(self):
     check(self, 'scene.gripper.', {
         'finger_width': Between(0.002, 0.1), 'finger_thickness': Between(0.001, 0.05),
-        'finger_length': Between(0.01, 0.2), 'max_opening': Between(0.01, 0.3),
+        'finger_length': Between(0.01, 0.2), 'max_opening': Between(*RANGES['scene.gripper.max_opening']),
         'palm': Between(0.001, 0.5), 'finger_force': Between(0, 1000, low_open=True),
         'finger_friction': Between(0, 10, low_open=True)})
     if self.max_opening <= 2 * self.finger_thickness:
@@ -187,7 +188,7 @@ class SceneConfig:
   def __post_init__(self):
     check(self, 'scene.', {
         'backend': BACKENDS, 'native_threads': Between(0, 1024),
-        'pool': Between(0, 256), 'workspace_half': Between(0.05, 1.0),
+        'pool': Between(0, 256), 'workspace_half': Between(*RANGES['scene.workspace_half']),
         'workspace_top': Between(0.05, 2.0), 'timestep': Between(0.0001, 0.02),
         'iterations': Between(1, 1000), 'ls_iterations': Between(1, 1000),
         'contact_timeconst': Between(0, 1, low_open=True),
@@ -266,7 +267,7 @@ class EnvConfig:
 
   def __post_init__(self):
     check(self, 'env.', {
-        'num_objects': Between(1, 256), 'num_rotations': Between(1, 64), 'drop': DROPS,
+        'num_objects': Between(1, 256), 'num_rotations': Between(*RANGES['env.num_rotations']), 'drop': DROPS,
         'heap_half': Between(0.02, 1), 'occluded_share': Between(0, 1),
         'packed_share': Between(0, 1),
         'settle_steps': Between(0, 100000), 'drop_margin': Between(0, 0.2),
@@ -274,7 +275,7 @@ class EnvConfig:
         'lift_height': Between(0, 1, low_open=True), 'approach_height': Between(0, 1, low_open=True),
         'descend_speed': Between(0, 10, low_open=True), 'lift_speed': Between(0, 10, low_open=True),
         'close_time': Between(0, 5, low_open=True), 'hold_time': Between(0, 5),
-        'push_height': Between(0, 0.2), 'push_length': Between(0, 1, low_open=True),
+        'push_height': Between(0, 0.2), 'push_length': Between(*RANGES['env.push_length']),
         'push_speed': Between(0, 10, low_open=True), 'min_tip_height': Between(0, 0.1),
         'max_qvel': Between(0, 1e6, low_open=True), 'max_failures': Between(0, 1000)})
 

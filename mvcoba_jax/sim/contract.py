@@ -10,6 +10,21 @@ import numpy as np
 # The primitives' numbers: the order of the networks' maps and of the exported graph's action.
 PUSH, GRASP = 0, 1
 
+# The ranges (closed) of the settings an export carries to a robot, checked alike by the configs
+# that train and evaluate with them (`sim.config.Between`) and by model.json's reader
+# (`deploy.model_file`), so neither holds a value the other refuses.
+RANGES = {
+    'env.num_rotations': (1, 64),
+    'env.push_length': (0.001, 1.0),  # m
+    'scene.workspace_half': (0.05, 1.0),  # m
+    'scene.gripper.max_opening': (0.01, 0.3),  # m
+    'perception.heightmap_resolution': (0.0005, 0.05),  # m per cell
+    'perception.change_min': (0.0, 1.0),  # m
+    'perception.change_max': (0.0, 1.0),  # m
+    'perception.change_area': (1e-6, 1.0),  # m^2
+    'perception.failed_grasp_retries': (0, 100),
+}
+
 
 def push_length(start, angle, length, half, xp=np):
   """How far a push from `start` (x, y) along `angle` (both in the workspace frame) slides, up to

@@ -340,6 +340,18 @@ def test_an_export_is_never_replaced_unasked(run, exported, tmp_path, capsys):
   assert not list(tmp_path.glob('.shipped.*'))  # no staging folder left
 
 
+def test_an_export_its_readers_would_refuse_is_not_written(run, tmp_path, monkeypatch):
+  """model.json is read back as the deploy path reads it before anything is written: a field
+  that reader refuses (here primitives numbered against the graph) fails the export in one line."""
+  real = export.model_file_of
+  monkeypatch.setattr(export, 'model_file_of', lambda config, method: dataclasses.replace(
+      real(config, method), push=1, grasp=0))
+  with pytest.raises(policy.PolicyError, match='its export would be refused by its readers .*'
+                                               'primitives push 1, grasp 0'):
+    export.export(run[1], tmp_path / 'out')
+  assert not (tmp_path / 'out').exists()
+
+
 def test_an_export_that_ends_while_another_converts_is_not_replaced(run, tmp_path, monkeypatch):
   """Two exports into one new folder at once: the one that finds the other's export there when
   it comes to write (after its own check and conversion) is refused, and the other's stays."""

@@ -2,6 +2,7 @@
 PolicyError naming the file and what is wrong, never a traceback from NumPy, Orbax or JAX."""
 import json
 import pathlib
+import re
 import shutil
 
 import jax
@@ -282,3 +283,26 @@ def test_model_json_with_primitives_swapped_is_refused(tmp_path):
   with pytest.raises(DeployError, match='primitives push 1, grasp 0: the graph\'s action numbers '
                                         'push 0 and grasp 1'):
     model_file.read(tmp_path)
+
+
+def test_every_setting_an_export_carries_has_one_range(tmp_path):
+  """The settings model.json carries to a robot (`sim.contract.RANGES`): a config refuses a
+  value just outside each range, naming it, and model.json's reader refuses the same values, so
+  an evaluation cannot run a push length that an export of it would refuse."""
+  from mvcoba_jax.config import ConfigError
+  from mvcoba_jax.deploy import DeployError, model_file
+  from mvcoba_jax.sim.contract import RANGES
+  for key, (low, high) in RANGES.items():
+    step = 1 if isinstance(low, int) else max(1e-9, low * 1e-3)
+    for outside in (low - step, high + step):
+      with pytest.raises(ConfigError, match=f'{re.escape(key)}=.*allowed range'):
+        resolve('default', [f'{key}={outside!r}'])
+  described = json.loads(pathlib.Path('pretrained/mvcoba/model.json').read_text())
+  for section, key in (('env', 'push_length'), ('perception', 'change_area'),
+                       ('perception', 'failed_grasp_retries')):
+    low = RANGES[f'{section}.{key}'][0]
+    edited = json.loads(json.dumps(described))
+    edited['config'][section][key] = low - (1 if isinstance(low, int) else low * 1e-3)
+    (tmp_path / 'model.json').write_text(json.dumps(edited))
+    with pytest.raises(DeployError, match=f'config.{section}.{key}'):
+      model_file.read(tmp_path)
