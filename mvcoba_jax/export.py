@@ -209,9 +209,10 @@ def _merged(described: dict, fields: dict) -> dict:
 
 def figures(results, model: networks.QNetwork) -> dict:
   """protocol -> suite -> the mean figures (and the runs behind them) of every row of these
-  results.json files that evaluated `model`'s parameters (`policy.fingerprint`). Raises
-  PolicyError naming the file that cannot be read, that holds no such row, or that measures one
-  protocol and suite twice with different figures."""
+  results.json files that evaluated `model`'s parameters (`policy.fingerprint`), with the
+  `--set` overrides each was measured under (`set`: [] where the policy acted as it trained).
+  Raises PolicyError naming the file that cannot be read, that holds no such row, or that
+  measures one protocol and suite twice with different figures or overrides."""
   mine, found = fingerprint(model), {}
   for path in map(pathlib.Path, results):
     try:
@@ -219,7 +220,8 @@ def figures(results, model: networks.QNetwork) -> dict:
       rows = [(str(row['settings'].get('protocol', 'frozen')), suite, {
           **row['mean'], 'cases': len(row['settings']['cases']),
           'runs_per_case': row['settings']['runs'], 'max_actions': row['settings']['max_actions'],
-          'seed': row['settings']['seed'], 'results': str(path)})
+          'seed': row['settings']['seed'], 'set': list(row['settings'].get('set', [])),
+          'results': str(path)})
               for suite, by_label in report.items() for row in by_label.values()
               if row['settings'].get('params') == mine]
     except (OSError, ValueError, TypeError, KeyError, AttributeError) as e:
@@ -230,8 +232,9 @@ def figures(results, model: networks.QNetwork) -> dict:
     for protocol, suite, figure in rows:
       known = found.setdefault(protocol, {}).get(suite)
       if known is not None and {**known, 'results': ''} != {**figure, 'results': ''}:
-        raise PolicyError(f'{path}: {protocol} {suite} measured again with other figures than '
-                          f'in {known["results"]}')
+        raise PolicyError(f'{path}: {protocol} {suite} measured again with other figures or '
+                          f'overrides (--set {figure["set"]}) than in {known["results"]} '
+                          f'(--set {known["set"]})')
       found[protocol][suite] = figure
   return found
 

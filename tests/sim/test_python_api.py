@@ -49,7 +49,16 @@ def test_export_carries_the_figures_measured_for_its_parameters(example, tmp_pat
   figure = model['figures']['frozen']['occluded']
   assert figure['grasp_success'] == row['mean']['grasp_success']
   assert figure['runs_per_case'] == 2 and figure['cases'] == len(row['settings']['cases'])
+  assert figure['set'] == []  # measured as the policy trained
   assert policy.load(tmp_path / 'out')[2] == 8
+  under = json.loads(results.read_text())
+  under['occluded']['mvcoba']['settings']['set'] = ['env.push_length=0.05']
+  (tmp_path / 'under.json').write_text(json.dumps(under))
+  paths = export.export(folder / 'train', tmp_path / 'under', [tmp_path / 'under.json'])
+  assert json.loads(paths['model_json'].read_text())['figures']['frozen']['occluded']['set'] == [
+      'env.push_length=0.05']
+  with pytest.raises(policy.PolicyError, match=r'measured again .*--set \[\]'):
+    export.export(folder / 'train', tmp_path / 'both', [results, tmp_path / 'under.json'])
 
   other = json.loads(results.read_text())
   other['occluded']['mvcoba']['settings']['params'] = '0' * 16
