@@ -73,9 +73,10 @@ class Policy(typing.NamedTuple):
     `perception.fill_unseen`, which fills each view's unseen cells from the others as training
     did (`perception.Observation.seen`).
 
-    The observation is checked before the network and the action after it (`deploy.checks`):
-    PolicyError names what is refused (another grid or number of views, heights not in metres,
-    colour out of its range, a non-finite score or a position off the workspace); non-finite
+    The observation is checked before the network and the action after it (`deploy.checks`, as
+    `deploy.OnnxPolicy.act` checks them): PolicyError names what is refused (another grid or
+    number of views, heights not in metres, colour out of its range, a view the network reads
+    that saw nothing by `seen`, a non-finite score or a position off the workspace); non-finite
     cells count as unseen (0)."""
     config, method = self.config, self.network.method
     top, half = config.scene.workspace_top, config.scene.workspace_half
@@ -85,8 +86,11 @@ class Policy(typing.NamedTuple):
     try:
       color, depth = checks.observation(color, depth, len(config.scene.cameras),
                                         perception.grid_size(config.perception, config.scene), top)
+      if seen is not None or config.perception.fill_unseen:
+        seen = checks.seen(seen, depth)
+        checks.sighted(seen, method.views)
       if config.perception.fill_unseen:
-        color, depth = filled(color, depth, checks.seen(seen, depth))
+        color, depth = filled(color, depth, seen)
     except checks.Refused as e:
       raise PolicyError(f'observation refused: {e}') from None
     depth = jnp.asarray(depth)[None]

@@ -73,6 +73,15 @@ def seen(values, depth: np.ndarray) -> np.ndarray:
   return mask
 
 
+def sighted(mask: np.ndarray, views, names=None) -> None:
+  """Raises Refused when a view the network reads (`views`, named by `names` where given) saw
+  none of the workspace: its heightmap is no observation of the scene."""
+  blind = [str(v if names is None else names[v]) for v in views if not mask[v].any()]
+  if blind:
+    raise Refused(f'{"camera" if names else "view"} {", ".join(blind)} sees none of the '
+                  'workspace')
+
+
 def action(q: float, angle: float, position: tuple[float, float, float], half: float,
            top: float) -> None:
   """Raises Refused unless the action has a finite score and angle and its workspace position

@@ -26,11 +26,29 @@ def read_depth(path, camera: Camera) -> np.ndarray:
 
 
 def read_color(path) -> np.ndarray:
-  """A colour image file (any format OpenCV reads) as RGB uint8 (OpenCV reads BGR)."""
-  image = cv2.imread(str(path), cv2.IMREAD_COLOR)
+  """A colour image file (any format OpenCV reads, 8 bits a channel, BGR or BGRA) as RGB uint8;
+  a one-channel or 16-bit file (a depth image given as colour) is refused."""
+  image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
   if image is None:
     raise DeployError(f'{path}: cannot read a colour image')
-  return cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
+  if image.ndim != 3 or image.shape[2] not in (3, 4) or image.dtype != np.uint8:
+    channels = 1 if image.ndim == 2 else image.shape[2]
+    raise DeployError(f'{path}: a colour image has 3 channels of 8 bits, this one {channels} of '
+                      f'{8 * image.dtype.itemsize} (a depth image?)')
+  return cv2.cvtColor(image, cv2.COLOR_BGRA2RGB if image.shape[2] == 4 else cv2.COLOR_BGR2RGB)
+
+
+def _array(value, kinds: str, where: str, what: str) -> np.ndarray:
+  """`value` as an array whose dtype is of `kinds` (numpy's kind letters), else DeployError."""
+  try:
+    array = np.asarray(value)
+  except (ValueError, TypeError) as e:
+    raise DeployError(f'{where}: {what}: not an array ({e})') from None
+  if array.dtype.kind not in kinds:
+    raise DeployError(f'{where}: {what} of {array.dtype} values; '
+                      f'{"real numbers" if "f" in kinds else "unsigned 8-bit or 0..1 floats"} '
+                      'expected')
+  return array
 
 
 def points(depth: np.ndarray, camera: Camera, calibration: Calibration, where: str):
@@ -53,6 +71,9 @@ def heightmaps(depths, calibration: Calibration, colors=None):
   """(color (V, R, R, 3) in 0..1, depth (V, R, R) m, seen (V, R, R)) of one depth image per
   camera of `calibration` (metres, (height, width)) and, optionally, one colour image each
   (RGB, uint8 or 0..1; none: colour 0)."""
+  for name, images in (('depths', depths), ('colors', colors)):
+    if not isinstance(images, (list, tuple, np.ndarray)) and (name, images) != ('colors', None):
+      raise DeployError(f'{name}={images!r:.40}: a list of one image per camera expected')
   if len(depths) != len(calibration.cameras):
     raise DeployError(f'{len(depths)} depth images for {len(calibration.cameras)} cameras')
   if colors is not None and len(colors) != len(depths):
@@ -63,7 +84,10 @@ def heightmaps(depths, calibration: Calibration, colors=None):
   out_seen = np.zeros((len(depths), r, r), bool)
   for i, (depth, camera) in enumerate(zip(depths, calibration.cameras)):
     where = f'camera {camera.name}'
-    xyz, pixel = points(np.asarray(depth, np.float64), camera, calibration, where)
+    depth = _array(depth, 'uif', where, 'depth image').astype(np.float64)
+    if depth.ndim != 2:
+      raise DeployError(f'{where}: depth image of shape {depth.shape}; (height, width) expected')
+    xyz, pixel = points(depth, camera, calibration, where)
     col = np.floor((xyz[:, 0] + half) / res).astype(np.int64)
     row = np.floor((xyz[:, 1] + half) / res).astype(np.int64)
     keep = ((row >= 0) & (row < r) & (col >= 0) & (col < r) & (xyz[:, 2] >= BELOW_TABLE)
@@ -76,10 +100,14 @@ def heightmaps(depths, calibration: Calibration, colors=None):
     out_seen[i] = seen.reshape(r, r)
     out_depth[i] = np.where(seen, best * HEIGHT_UNIT, 0.0).reshape(r, r)
     if colors is not None:
-      image = np.asarray(colors[i])
+      image = _array(colors[i], 'uf', where, 'colour image')
       if image.shape[:2] != depth.shape or image.ndim != 3 or image.shape[2] != 3:
         raise DeployError(f'{where}: colour image of shape {image.shape}, its depth image is '
                           f'{depth.shape[1]}x{depth.shape[0]} (RGB expected)')
+      if image.dtype.kind == 'u' and image.dtype != np.uint8 or image.dtype.kind == 'f' and not (
+          np.isfinite(image).all() and 0 <= image.min() and image.max() <= 1):
+        raise DeployError(f'{where}: colour image of {image.dtype} values from {image.min()} to '
+                          f'{image.max()}: uint8, or finite floats in 0..1, expected')
       rgb = image.reshape(-1, 3)[pixel[keep]].astype(np.float32)
       rgb = rgb / 255.0 if image.dtype == np.uint8 else rgb
       top = height == best[cell]  # the colour of the highest point of its cell

@@ -170,14 +170,12 @@ class OnnxPolicy:
       color, depth = checks.observation(color, depth, spec.num_views, spec.grid_size,
                                         calibration.top)
       seen = checks.seen(seen, depth)
+      checks.sighted(seen, spec.views_used, [c.name for c in calibration.cameras])
     except checks.Refused as e:
       raise DeployError(f'refused: {e}') from None
     if spec.fill_unseen:  # as training saw them: each view's unseen cells from the others
       color, depth = filled(color, depth, seen)
     used = list(spec.views_used)
-    blind = [calibration.cameras[v].name for v in used if not seen[v].any()]
-    if blind:
-      raise DeployError(f'refused: camera {", ".join(blind)} sees none of the workspace')
     primitive, rotation, row, col, score = self.choose(color, depth, changed)
     x, y = pixel_to_world(row, col, res, half)
     z = float(depth[used, row, col].max())

@@ -165,7 +165,8 @@ def test_the_deploy_api_takes_a_plain_yes_or_no_as_the_jax_policy_does(scenes, o
   """The same `changed` values to `Policy.act` and `OnnxPolicy.act`: numpy's booleans act as
   Python's, the same action on both; anything else ('no', None, [], 0, a 0-d array) is refused by
   both in one line. `OnnxPolicy.changed`: a gripper's np.False_ applies the failed-grasp rule as
-  False does; a reading that is no boolean, or failed grasps that are no whole number, refused."""
+  False does; a reading that is no boolean, or failed grasps that are no whole number, refused.
+  A view the network reads that saw nothing is refused by both."""
   env, _, _, observed = scenes
   jax_policy = policy.load(ROOT / 'pretrained' / 'mvcoba')
   cal = calibration_from_dict(calibration(env))
@@ -180,6 +181,12 @@ def test_the_deploy_api_takes_a_plain_yes_or_no_as_the_jax_policy_does(scenes, o
       jax_policy.act(color, depth, bad, seen=seen)
     with pytest.raises(DeployError, match=r'^changed=.*: True or False'):
       onnx.act(color, depth, seen, bad, cal)
+  blind = seen.copy()
+  blind[1] = False  # a camera that saw nothing: refused by both, not filled from the other
+  with pytest.raises(policy.PolicyError, match='view 1 sees none of the workspace'):
+    jax_policy.act(color, depth, True, seen=blind)
+  with pytest.raises(DeployError, match='camera .* sees none of the workspace'):
+    onnx.act(color, depth, blind, True, cal)
   frame = (depth, seen)
   assert onnx.changed(frame, frame, grasped=np.True_) is True
   retries = onnx.spec.failed_grasp_retries

@@ -77,6 +77,47 @@ def test_wrong_image_sizes_and_empty_depth_are_refused(tmp_path):
   assert seen.any() and np.abs(depth[seen]).max() == 0.0
 
 
+@pytest.mark.parametrize('depths, colors, says', [
+    (None, None, 'depths=None: a list of one image per camera'),
+    ([None], None, 'depth image of object values; real numbers expected'),
+    (['far'], None, 'depth image of <U3 values; real numbers expected'),
+    ([np.ones(64)], None, r'depth image of shape \(64,\)'),
+    ([np.ones((48, 64), complex)], None, 'depth image of complex128 values'),
+    ([np.full((48, 64), 0.58).tolist()], [np.zeros((48, 64, 3)).tolist()], None),
+    ([np.ones((48, 64))], [np.zeros((48, 64, 3), bool)], 'colour image of bool values'),
+    ([np.ones((48, 64))], [np.full((48, 64, 3), np.nan)], 'colour image of float64 values from '
+                                                         'nan'),
+    ([np.ones((48, 64))], [np.full((48, 64, 3), 255.0)], 'finite floats in 0..1'),
+    ([np.ones((48, 64))], [np.zeros((48, 64, 3), np.uint16)], 'uint8, or finite floats'),
+    ([np.ones((48, 64))], 'rgb', "colors='rgb': a list of one image per camera"),
+])
+def test_images_of_the_wrong_kind_are_refused_in_one_line(tmp_path, depths, colors, says):
+  """Depth and colour images come as lists of real-valued arrays of the camera's size, colour as
+  uint8 or finite 0..1 floats; anything else is one DeployError naming the camera, not a
+  traceback or colour read from NaN. Lists of numbers are arrays like any other."""
+  cal = load_calibration(write(tmp_path, GOOD))
+  if says is None:
+    _, _, seen = heightmaps(depths, cal, colors)
+    assert seen.any()
+    return
+  with pytest.raises(DeployError, match=says):
+    heightmaps(depths, cal, colors)
+
+
+def test_a_depth_image_read_as_colour_is_refused(tmp_path):
+  """read_color takes 8-bit colour files (BGR or BGRA) and refuses a 16-bit or one-channel one,
+  the depth image given in its place."""
+  import cv2
+  from mvcoba_jax.deploy.heightmaps import read_color
+  cv2.imwrite(str(tmp_path / 'depth.png'), np.full((48, 64), 600, np.uint16))
+  with pytest.raises(DeployError, match='3 channels of 8 bits, this one 1 of 16 .a depth image'):
+    read_color(tmp_path / 'depth.png')
+  cv2.imwrite(str(tmp_path / 'rgba.png'), np.dstack([np.zeros((48, 64, 2), np.uint8),
+                                                     np.full((48, 64, 2), 255, np.uint8)]))
+  rgb = read_color(tmp_path / 'rgba.png')
+  assert rgb.shape == (48, 64, 3) and (rgb[..., 0] == 255).all() and (rgb[..., 2] == 0).all()
+
+
 def test_the_deploy_package_imports_without_jax_or_mujoco():
   code = ('import sys; sys.modules["jax"] = None; sys.modules["mujoco"] = None\n'
           'import mvcoba_jax.deploy\nprint("ok")')
