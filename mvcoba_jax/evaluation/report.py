@@ -13,7 +13,7 @@ import numpy as np
 from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Error
 from mvcoba_jax.evaluation import intervals, metrics
-from mvcoba_jax.evaluation.protocols import labelled
+from mvcoba_jax.evaluation.protocols import PROTOCOLS, labelled
 
 METRICS = (('grasp_success', 'grasp success (%)'), ('action_efficiency', 'action efficiency (%)'),
            ('completion', 'completion (%)'), ('objects_picked', 'objects picked (%)'),
@@ -268,6 +268,10 @@ def read_results(path: pathlib.Path, purpose: str = '') -> dict:
                        f'({type(e).__name__}: {str(e)[:120]})') from None
   if not isinstance(data, dict) or not all(isinstance(rows, dict) for rows in data.values()):
     raise ResultsError(f'{path}: not the results of mvcoba-eval (suite -> method -> results)')
+  odd = next((name for rows in (data, *data.values()) for name in rows
+              if not name.isprintable()), None)
+  if odd is not None:
+    raise ResultsError(f'{path}: suite or row {odd[:40]!r}: names of one line of text expected')
   return data
 
 
@@ -363,9 +367,14 @@ WALL_LIMIT_S = 10 ** 7  # seconds a row could take: about four months
 
 def fitting_settings(settings, by_case: dict, where: str) -> None:
   """Raises ResultsError when a row's runs do not fit the settings it records: its cases, runs
-  per case, action cap and the objects each case file lists (each that the settings hold)."""
+  per case, action cap and the objects each case file lists (each that the settings hold), or
+  its protocol is none that evaluation runs."""
   if not isinstance(settings, dict):
     raise ResultsError(f'{where}.settings: expected an object, got {str(settings)[:40]!r}')
+  protocol = settings.get('protocol')  # None: written before evaluation recorded it (frozen)
+  if protocol is not None and (not isinstance(protocol, str) or protocol not in PROTOCOLS):
+    raise ResultsError(f'{where}.settings.protocol {str(protocol)[:40]!r}: one of '
+                       f'{", ".join(PROTOCOLS)} expected')
   for key in ('cases', 'runs', 'max_actions'):
     if key not in settings or settings[key] is None:
       raise ResultsError(f'{where}.settings.{key}: missing; the row cannot be checked (evaluate '

@@ -31,6 +31,9 @@ def suite_files(names: list[str]) -> dict[str, list[pathlib.Path]]:
     names = [n for n in names if n != 'all'] + list(SEALED) + ['isolated', 'vpg']
   out = {}
   for name in dict.fromkeys(names):
+    if not name.isprintable():  # it heads a table and keys the results: one line of text
+      raise ScenarioError(f'suite {name!r}: a name or path without line breaks or control '
+                          'characters expected')
     if name in SUITES:
       files = sorted((SUITES_DIR / name).glob('*.txt' if name == 'vpg' else '*.scn'))
     else:

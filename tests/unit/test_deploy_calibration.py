@@ -123,3 +123,31 @@ def test_the_deploy_package_imports_without_jax_or_mujoco():
           'import mvcoba_jax.deploy\nprint("ok")')
   out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, timeout=60)
   assert out.stdout.strip() == 'ok', out.stderr[-400:]
+
+
+def test_fuzzed_image_arguments_are_refused_in_one_line_or_accepted(tmp_path):
+  """Generated arguments to heightmaps() (fixed seed): odd values, shapes and dtypes for the
+  depth and colour lists, each answered by heightmaps of the grid or one DeployError line."""
+  import random
+  rng = random.Random(0)
+  cal = load_calibration(write(tmp_path, GOOD))
+  good_depth, good_color = np.full((48, 64), 0.58), np.zeros((48, 64, 3), np.uint8)
+  odd = [None, 'x', 0, 1.5, True, [], {}, np.nan, np.zeros(0), np.zeros((48, 64, 3)),
+         np.full((48, 64), np.inf), np.full((48, 64), -1.0), np.ones((48, 64), np.int16),
+         np.ones((48, 64), complex), np.zeros((48, 64), object), good_depth.tolist(),
+         np.zeros((48, 64, 3), np.float32) + 2, np.zeros((64, 48, 3), np.uint8), good_color,
+         good_depth]
+  outcomes = {'ok': 0, 'refused': 0}
+  for _ in range(300):
+    depths = rng.choice([[good_depth], [rng.choice(odd)], rng.choice(odd), [good_depth] * 2])
+    colors = rng.choice([None, [good_color], [rng.choice(odd)], rng.choice(odd)])
+    try:
+      color, depth, seen = heightmaps(depths, cal, colors)
+    except DeployError as e:
+      assert '\n' not in str(e) and len(str(e)) < 300, str(e)
+      outcomes['refused'] += 1
+      continue
+    assert color.shape == (1, 112, 112, 3) and depth.shape == seen.shape == (1, 112, 112)
+    assert np.isfinite(color).all() and 0 <= color.min() and color.max() <= 1
+    outcomes['ok'] += 1
+  assert outcomes['ok'] > 10 and outcomes['refused'] > 100, outcomes

@@ -77,6 +77,9 @@ def test_rows_that_do_not_fit_their_own_settings_are_refused_naming_the_field(tm
       (lambda r: r['settings'].pop('runs'), 'settings.runs: missing'),
       (lambda r: r['settings'].update(cases=None), 'settings.cases: missing'),
       (lambda r: r['settings'].update(cases=[0]), 'settings.cases'),
+      (lambda r: r['settings'].update(protocol='bogus'), "settings.protocol 'bogus': one of "
+                                                         'frozen, online, no-repeat'),
+      (lambda r: r['settings'].update(protocol=['online']), 'settings.protocol'),
   ]
   for i, (edit, says) in enumerate([(lambda r: None, None)] + tampered):
     data = copy.deepcopy(good)
@@ -102,3 +105,19 @@ def test_a_bar_in_a_case_name_stays_inside_its_cell(tmp_path):
   text = report.table(rescored, 'grasp_success', 'grasp success', ['a|b'])
   head, rule, line = text.splitlines()
   assert head.count(' | ') == line.count(' | ') == 2 and 'a\\|b' in head and 'mvcoba\\|x' in line
+
+
+def test_a_suite_name_of_more_than_one_line_is_refused(tmp_path, capsys):
+  """A suite or row name heads a Markdown table: one with a line break (a results.json key, or a
+  --suite path) is refused in one line instead of starting a heading of its own."""
+  for name in ('ordered\n# injected', 'tab\there'):
+    folder = tmp_path / f'r{len(name)}'
+    folder.mkdir()
+    (folder / 'results.json').write_text(json.dumps({name: VALID['ordered']}))
+    assert eval_cli.main(['--tables', str(folder), '--out', str(tmp_path / 'o')]) == 2
+    err = capsys.readouterr().err
+    assert 'names of one line of text expected' in err and err.count('\n') == 1, err
+  assert eval_cli.main(['--baseline', 'heuristic', '--suite', 'a\nb', '--out',
+                        str(tmp_path / 'e')]) == 2
+  err = capsys.readouterr().err
+  assert 'without line breaks or control characters' in err and err.count('\n') == 1, err
