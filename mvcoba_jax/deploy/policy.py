@@ -110,7 +110,8 @@ class OnnxPolicy:
                         'leaves the action rule to the runtime; export it again '
                         f'(mvcoba-export --checkpoint {folder} --out NEW_FOLDER)')
     self.model = self.spec.raw
-    if gripper is not None and not other_gripper:
+    if gripper is not None and not _flag('other_gripper', other_gripper,
+                                         'act with a gripper other than the policy\'s'):
       check_gripper(self.gripper, gripper, folder)
     onnx_file = folder / self.spec.onnx_file
     options = ort.SessionOptions()
@@ -129,6 +130,9 @@ class OnnxPolicy:
 
   def check(self, calibration: Calibration) -> None:
     """Refuses a calibration whose workspace grid or number of cameras is not the policy's."""
+    if not isinstance(calibration, Calibration):
+      raise DeployError(f'calibration={calibration!r:.40}: a deploy.Calibration expected '
+                        '(deploy.load_calibration reads one from its file)')
     spec = self.spec
     if (abs(calibration.half - spec.workspace_half_m) > 1e-9
         or abs(calibration.resolution - spec.resolution_m) > 1e-9):

@@ -306,3 +306,17 @@ def test_every_setting_an_export_carries_has_one_range(tmp_path):
     (tmp_path / 'model.json').write_text(json.dumps(edited))
     with pytest.raises(DeployError, match=f'config.{section}.{key}'):
       model_file.read(tmp_path)
+
+
+def test_the_deploy_policys_other_arguments_are_typed(tmp_path):
+  """`other_gripper` is a plain yes or no (a string does not wave the gripper check through) and
+  `act` takes a Calibration, each refused in one line otherwise."""
+  from mvcoba_jax.deploy import DeployError, OnnxPolicy  # noqa: PLC0415
+  shutil.copy('pretrained/mvcoba/model.json', tmp_path / 'model.json')
+  _constant_graph(tmp_path, EXPORT_INPUTS, EXPORT_OUTPUTS)
+  with pytest.raises(DeployError, match="other_gripper='no': True or False"):
+    OnnxPolicy(tmp_path, gripper='robotiq_2f85', other_gripper='no')
+  assert OnnxPolicy(tmp_path, gripper='robotiq_2f85', other_gripper=True).gripper['name'] == 'rg2'
+  zeros = np.zeros((2, 112, 112), np.float32)
+  with pytest.raises(DeployError, match=r'calibration=\{\}: a deploy.Calibration expected'):
+    OnnxPolicy(tmp_path).act(zeros[..., None].repeat(3, -1), zeros, zeros > 0, True, {})
