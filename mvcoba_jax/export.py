@@ -5,7 +5,7 @@ directory (config.json, checkpoints/) and writes the following to DIR; `policy.l
 (`mvcoba-eval --checkpoint DIR`), so a trained policy travels without its training state:
 - params.npz: the network parameters by flat name (`fcns/0/trunk/blocks/0/conv1/kernel`);
 - model.onnx: the whole decision on one state: the Q-network forward for all K rotations,
-  rotations included, and the method's action rule and argmax (`agent.decide`), given whether
+  rotations included, and the method's action rule and argmax (`agent.Decision`), given whether
   the last action changed the scene;
 - model.json: names, shapes and dtypes of the parameters, the config, the heightmap frame, the
   rotations, the input normalisation, the method's action rule in words and what the ONNX graph
@@ -44,7 +44,7 @@ ONNX_OPSET = 23
 def onnx_model(config: Config, model: networks.QNetwork):
   """ModelProto of (color (1, V, R, R, 3), depth (1, V, R, R), changed (1,) bool) -> q
   (1, 2, K, R, R), the rule's scores where it suppresses, action (1, 4) int32 (primitive,
-  rotation, row, col) and value (1,): `agent.decide`, traced, so a runtime applies no rule."""
+  rotation, row, col) and value (1,): `agent.Decision.act`, traced, so a runtime applies no rule."""
   # jax2onnx's plugins for dm_pix, which the network does not use, fail to import under this
   # JAX and log a traceback each; they are skipped either way.
   logging.getLogger('jax2onnx.plugins.plugin_system').setLevel(logging.ERROR)
@@ -58,14 +58,14 @@ def onnx_model(config: Config, model: networks.QNetwork):
   graphdef, params = nnx.split(model)
   side, views = perception.grid_size(config.perception, config.scene), len(config.scene.cameras)
   method = model.method
-  suppress = agent.suppresses(method, config)
+  decision = agent.Decision.of(method, config)
 
-  def forward(color, depth, changed):  # `agent.decide`, its rule's maps kept as an output
+  def forward(color, depth, changed):  # `Decision.act`, its rule's maps kept as an output
     q = nnx.merge(graphdef, params)(color, depth)
-    maps = agent.rule_maps(q, depth, method, config)
+    maps = decision.maps(q, depth)
     action, value = agent.greedy(maps, changed, method)
     chosen = jnp.stack([action.primitive, action.rotation, action.row, action.col], axis=-1)
-    return (q, *((maps,) if suppress else ()), chosen, value)
+    return (q, *((maps,) if decision.suppress else ()), chosen, value)
 
   try:
     return to_onnx(forward, [jax.ShapeDtypeStruct((1, views, side, side, 3), jnp.float32),
@@ -73,7 +73,7 @@ def onnx_model(config: Config, model: networks.QNetwork):
                              jax.ShapeDtypeStruct((1,), jnp.bool_)],
                    model_name=f'mvcoba_{method.name}_q', opset=ONNX_OPSET,
                    input_names=['color', 'depth', 'changed'],
-                   output_names=list(output_names(suppress)))
+                   output_names=list(output_names(decision.suppress)))
   except Exception as e:  # noqa: BLE001 (the converter raises any kind on what it cannot trace)
     raise PolicyError(f'method {method.name}: its decision does not convert to ONNX '
                       f'({type(e).__name__}: {str(e)[:160]}); a Rule\'s pick must avoid '
@@ -88,7 +88,7 @@ def output_names(suppress: bool) -> tuple[str, ...]:
 
 def action_rule(method: methods.Method, suppress: bool = False) -> dict:
   """The method's `Rule` in words, applied inside the graph; its maps are the scores where it
-  suppresses (`agent.suppresses`)."""
+  suppresses (`agent.Decision.suppress`)."""
   maps = 'score' if suppress or method.suppress else 'q'
   return {'name': method.rule.name, 'maps': maps, 'primitive': method.rule.text,
           'pixel': (f'argmax of that primitive\'s {maps} over (rotation, row, col), flattened in '
@@ -103,7 +103,7 @@ def describe(config: Config, method: methods.Method, params: dict[str, np.ndarra
   code that trained it when known, `measured` is `figures`' answer."""
   spec = model_file_of(config, method)
   side, k, num_views = spec.grid_size, spec.num_rotations, spec.num_views
-  suppress = agent.suppresses(method, config)
+  suppress = agent.Decision.of(method, config).suppress
   half = spec.workspace_half_m
   described = {
       'format': model_file.FORMAT,

@@ -3,7 +3,6 @@ or from a folder that `mvcoba-export` wrote (model.json, params.npz), which trav
 training state."""
 from __future__ import annotations
 
-import dataclasses
 import functools
 import hashlib
 import json
@@ -21,6 +20,7 @@ from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Config, Error
 from mvcoba_jax.deploy import checks, model_file
 from mvcoba_jax.deploy.calibration import DeployError
+from mvcoba_jax.deploy.policy import Action
 from mvcoba_jax.deploy.heightmaps import filled
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.sim.geometry import rotation_angle
@@ -33,23 +33,6 @@ STEP_LIMIT = 10 ** 12  # actions: more than any training here could take
 
 class PolicyError(Error):
   """A folder that holds no usable policy; the message names the path or config keys."""
-
-
-@dataclasses.dataclass(frozen=True)
-class Decision:
-  """The action a policy takes on one observation, in the workspace frame (m, rad)."""
-  primitive: str  # 'push' or 'grasp'
-  rotation: int  # index k: angle k * 2 pi / num_rotations
-  angle: float  # the gripper's yaw and the push direction, anticlockwise from +x
-  row: int  # heightmap cell: row grows with y, col with x
-  col: int
-  x: float  # the cell's centre
-  y: float
-  z: float  # the highest surface the method's views see in the cell
-  q: float  # the rule's score of the action
-  # m a push slides along `angle`: env.push_length cut at the workspace's edge, as the simulator
-  # and the robot cut it (`sim.contract.push_length`); 0 for a grasp
-  push_length: float
 
 
 class Policy(typing.NamedTuple):
@@ -65,13 +48,15 @@ class Policy(typing.NamedTuple):
     return np.asarray(self.network(jnp.asarray(color, jnp.float32)[None],
                                    jnp.asarray(depth, jnp.float32)[None])[0])
 
-  def act(self, color, depth, changed: bool = True, seen=None) -> Decision:
+  def act(self, color, depth, changed: bool = True, seen=None) -> Action:
     """The greedy action on one observation (`q_maps`' arguments): the method's rule picks the
     primitive (MV-COBA's: grasp when the last action changed the scene, `changed`, else push;
     model.json's `action_rule` says each method's) and the argmax rotation and cell of its map.
     `seen` (V, R, R) bool, which cells each view saw, is needed by a policy trained with
     `perception.fill_unseen`, which fills each view's unseen cells from the others as training
-    did (`perception.Observation.seen`).
+    did (`perception.Observation.seen`). The action is the one record a robot takes
+    (`deploy.Action`), here in the workspace frame: its position the cell's centre at the highest
+    surface the method's views see there, its angle anticlockwise from +x.
 
     The observation is checked before the network and the action after it (`deploy.checks`, as
     `deploy.OnnxPolicy.act` checks them): PolicyError names what is refused (another grid or
@@ -94,23 +79,24 @@ class Policy(typing.NamedTuple):
     except checks.Refused as e:
       raise PolicyError(f'observation refused: {e}') from None
     depth = jnp.asarray(depth)[None]
-    pick, score = agent.decide(jnp.asarray(self.q_maps(color, depth[0]))[None], depth,
-                               jnp.asarray([bool(changed)]), method, config)
+    pick, score = agent.Decision.of(method, config).act(
+        jnp.asarray(self.q_maps(color, depth[0]))[None], depth, jnp.asarray([bool(changed)]))
     world = agent.to_world(pick, depth, method.views, config.perception.heightmap_resolution,
                            half)
-    k, primitive = int(pick.rotation[0]), ('push', 'grasp')[int(pick.primitive[0])]
-    angle, x, y = float(rotation_angle(k, config.env.num_rotations)), float(world.x[0]), \
-        float(world.y[0])
-    push = 0.0 if primitive == 'grasp' else float(
-        push_length((x, y), angle, config.env.push_length, half))
-    decision = Decision(primitive=primitive, rotation=k, angle=angle, row=int(pick.row[0]),
-                        col=int(pick.col[0]), x=x, y=y, z=float(world.z[0]), q=float(score[0]),
-                        push_length=push)
+    k, grasp = int(pick.rotation[0]), int(pick.primitive[0]) == agent.GRASP
+    angle = float(rotation_angle(k, config.env.num_rotations))
+    position = (float(world.x[0]), float(world.y[0]), float(world.z[0]))
+    action = Action(
+        primitive='grasp' if grasp else 'push', position=position, angle=angle,
+        push_length=0.0 if grasp else float(push_length(position[:2], angle,
+                                                        config.env.push_length, half)),
+        opening=config.scene.gripper.max_opening if grasp else 0.0, rotation=k,
+        row=int(pick.row[0]), col=int(pick.col[0]), q=float(score[0]))
     try:
-      checks.action(decision.q, decision.angle, (decision.x, decision.y, decision.z), half, top)
+      checks.action(action.q, action.angle, action.position, half, top)
     except checks.Refused as e:
       raise PolicyError(f'action refused: {e}') from None
-    return decision
+    return action
 
 
 def _config(saved: dict, path: pathlib.Path) -> Config:

@@ -17,10 +17,12 @@ from mvcoba_jax.sim.contract import pixel_to_world, push_length
 
 @dataclasses.dataclass(frozen=True)
 class Action:
-  """A primitive for the robot, in its base frame (m, rad), with the cell and score it came from."""
+  """A primitive for the robot (m, rad), with the cell and score it came from: the one action
+  record that leaves the project, in the robot's base frame from `OnnxPolicy.act` (given a
+  calibration) and in the workspace frame from `Policy.act`."""
   primitive: str  # 'push' or 'grasp'
-  position: tuple[float, float, float]  # base frame: the cell's centre at its surface height
-  angle: float  # base frame: the gripper's yaw and the push direction about +z
+  position: tuple[float, float, float]  # the cell's centre at its surface height
+  angle: float  # the gripper's yaw and the push direction about +z
   push_length: float  # m a push slides along `angle`: config.env.push_length, cut short at the
   # workspace's edge (`sim.contract.push_length`); 0 for a grasp
   opening: float  # m to open the fingers to before a grasp (the gripper's max_opening); 0 for

@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import nnx, struct
 
-from mvcoba_jax import methods, perception
+from mvcoba_jax import perception
 from mvcoba_jax.config import Config
 from mvcoba_jax.evaluation.metrics import RunLog
 from mvcoba_jax.learner import agent, networks
@@ -125,6 +125,7 @@ class Online(Actor):
     self.graphdef, self.params = nnx.split(model)
     self.config = config
     self.method = model.method
+    self.decision = agent.Decision.of(model.method, config)
     self.optimizer = agent.optimizer(config.train)
 
   def q_maps(self, params, obs: perception.Observation, rotations=None):
@@ -147,7 +148,7 @@ class Online(Actor):
     (0.85 s against 2.7 s for 18 runs of the default preset)."""
     one = lambda args: self.q_maps(args[0], jax.tree.map(lambda x: x[None], args[1]))[0]
     q = jax.lax.map(one, (learner.params, obs))
-    action, _ = agent.decide(q, obs.depth, changed, self.method, self.config)
+    action, _ = self.decision.act(q, obs.depth, changed)
     return action, self.learn(learner, q, changed, active)
 
   def learn(self, learner: Learner, q, changed, active) -> Learner:
@@ -384,16 +385,16 @@ def losses(trace: Trace, names: list[str], task: Task) -> list[dict]:
   return records
 
 
-def greedy_actor(q_maps: Callable, method: methods.Method, config,
-                 no_repeat: bool = False) -> Frozen:
-  """A trained network, frozen and greedy: `q_maps(obs)` -> (N, 2, K, R, R). With `no_repeat`
-  it never takes a failed action of its run again while nothing has changed: the next best one."""
+def greedy_actor(q_maps: Callable, decision: agent.Decision, no_repeat: bool = False) -> Frozen:
+  """A trained network, frozen and greedy: `q_maps(obs)` -> (N, 2, K, R, R), its maps' rule
+  `decision`'s. With `no_repeat` it never takes a failed action of its run again while nothing
+  has changed: the next best one."""
 
   def choose(obs, changed, keys, failed):
-    maps = agent.rule_maps(q_maps(obs), obs.depth, method, config)
+    maps = decision.maps(q_maps(obs), obs.depth)
     if no_repeat:
       maps = without(maps, *failed)
-    return agent.greedy_actions(maps, changed, method)
+    return agent.greedy_actions(maps, changed, decision.method)
   return Frozen(choose)
 
 

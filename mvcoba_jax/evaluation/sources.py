@@ -13,6 +13,7 @@ from mvcoba_jax import policy as policy_lib
 from mvcoba_jax.config import Config
 from mvcoba_jax.evaluation import runner
 from mvcoba_jax.evaluation.protocols import Protocol
+from mvcoba_jax.learner import agent
 
 BASELINES = ('heuristic',)  # policies without training (`runner.heuristic_actor`)
 
@@ -53,7 +54,8 @@ class Source:
     graphdef, params = nnx.split(self.network)
     q_maps = lambda obs: nnx.merge(graphdef, params)(obs.color, obs.depth)
     # `networks.QNetwork` carries its method
-    return runner.greedy_actor(q_maps, self.network.method, config, protocol.no_repeat)
+    return runner.greedy_actor(q_maps, agent.Decision.of(self.network.method, config),
+                               protocol.no_repeat)
 
 
 def trained(path, overrides=()) -> Source:

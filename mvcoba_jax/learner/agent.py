@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import optax
 from flax import struct
 
-from mvcoba_jax.config import Config, TrainConfig
+from mvcoba_jax.config import Config, GripperConfig, TrainConfig
 from mvcoba_jax.learner import networks, suppression
 from mvcoba_jax.methods import Method
 from mvcoba_jax.sim.contract import pixel_to_world
@@ -28,35 +28,55 @@ class PixelAction:
   col: jnp.ndarray  # (B,) int32
 
 
-def suppresses(method: Method, config: Config) -> bool:
-  """Whether the rule compares suppressed scores: a suppressing method (CPG), or any method with
-  `network.suppress`."""
-  return method.suppress or config.network.suppress
+@dataclasses.dataclass(frozen=True)
+class Decision:
+  """How Q maps become an action, built once from the method and the settings its rule reads
+  (`of`) and held by everything that acts: training explores through it (`explore`), the
+  evaluation's actors, `Policy.act` and the exported graph act greedily through it (`act`,
+  `maps`). A new setting of the rule is a field here, read nowhere else.
+
+  With `suppress` (a suppressing method, CPG, or `network.suppress`) the rule compares
+  `suppression.scores` of the Q maps: actions whose fingers cannot land, or pushes with nothing
+  ahead, scored out (`push_room`, the gripper's fingers and the grid's `resolution` say where)."""
+  method: Method
+  suppress: bool
+  resolution: float  # m per heightmap cell
+  push_room: float
+  gripper: GripperConfig
+
+  @classmethod
+  def of(cls, method: Method, config: Config) -> Decision:
+    return cls(method=method, suppress=method.suppress or config.network.suppress,
+               resolution=config.perception.heightmap_resolution,
+               push_room=config.network.push_room, gripper=config.scene.gripper)
+
+  def maps(self, q, depth):
+    """The maps (B, 2, K, R, R) the rule compares and takes the argmax of: the Q maps `q` of
+    every rotation, or where it suppresses their scores, for states of heightmaps `depth`
+    (B, V, R, R)."""
+    if not self.suppress:
+      return q
+    method = self.method
+    return suppression.scores(q, surface_height(depth, method.views), self.resolution,
+                              per_primitive=not method.rule.compares_primitives,
+                              push_room=self.push_room, gripper=self.gripper)
+
+  def act(self, q, depth, changed):
+    """(action, score): the greedy action on Q maps `q` and the value its rule compared there.
+    `changed` (B,): whether the previous action changed the scene (True before the first)."""
+    return greedy(self.maps(q, depth), changed, self.method)
+
+  def explore(self, q, depth, changed, occupied, epsilon, key):
+    """(action, explored): `act`'s action, each replaced with probability `epsilon` by a random
+    one (`epsilon_greedy`): how training acts."""
+    return epsilon_greedy(self.maps(q, depth), changed, occupied, epsilon, key, self.method)
 
 
-def rule_maps(q, depth, method: Method, config: Config):
-  """The maps (B, 2, K, R, R) the method's rule compares and takes the argmax of: its Q maps
-  `q` of every rotation, or where it `suppresses` `suppression.scores` of them."""
-  if not suppresses(method, config):
-    return q
-  return suppression.scores(q, surface_height(depth, method.views),
-                            config.perception.heightmap_resolution,
-                            per_primitive=not method.rule.compares_primitives,
-                            push_room=config.network.push_room, gripper=config.scene.gripper)
-
-
-def greedy_actions(q, changed, method: Method) -> PixelAction:
+def greedy_actions(maps, changed, method: Method) -> PixelAction:
   """The rule's primitive at the argmax rotation and pixel of its maps (B, 2, K, R, R): Q maps,
-  or `rule_maps` of them. `changed` is whether the previous action changed the scene (True
+  or `Decision.maps` of them. `changed` is whether the previous action changed the scene (True
   before the first action). The first maximum wins, in (rotation, row, col) order."""
-  return greedy(q, changed, method)[0]
-
-
-def decide(q, depth, changed, method: Method, config: Config):
-  """(action, score): the greedy action on Q maps `q` (B, 2, K, R, R) of states whose heightmaps
-  are `depth` (B, V, R, R), and the value its rule compared there (`rule_maps`). What a policy
-  and the online actor decide."""
-  return greedy(rule_maps(q, depth, method, config), changed, method)
+  return greedy(maps, changed, method)[0]
 
 
 def greedy(maps, changed, method: Method):
@@ -76,8 +96,9 @@ def greedy(maps, changed, method: Method):
   return action, jnp.where(at, chosen, 0.0).sum(axis=-1)
 
 
-def epsilon_greedy(q, changed, occupied, epsilon, key, method: Method):
-  """Greedy actions, each replaced with probability epsilon by a random one; also says which.
+def epsilon_greedy(maps, changed, occupied, epsilon, key, method: Method):
+  """Greedy actions on the rule's `maps`, each replaced with probability epsilon by a random
+  one; also says which.
 
   A random action keeps the rule's primitive (or draws it, `Rule.explores_primitive`) and draws a
   rotation and a pixel where something stands (`occupied`, (B, R, R); anywhere on an empty
@@ -85,8 +106,8 @@ def epsilon_greedy(q, changed, occupied, epsilon, key, method: Method):
   actions that teach only what the network learns in its first minutes. With them, a default
   run's training window ended at 64% while its greedy policy grasped 81%.
   """
-  b, _, k, r, _ = q.shape
-  greedy = greedy_actions(q, changed, method)
+  b, _, k, r, _ = maps.shape
+  greedy = greedy_actions(maps, changed, method)
   k_explore, k_prim, k_rot, k_pixel = jax.random.split(key, 4)
   explore = jax.random.uniform(k_explore, (b,)) < epsilon
   primitive = greedy.primitive

@@ -71,6 +71,7 @@ class Trainer:
     self.mesh = mesh if mesh is not None and mesh.devices.size > 1 else None
     model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))
     self.method = model.method  # the network carries its method
+    self.decision = agent.Decision.of(self.method, config)
     self.task = task.Task.build(config, self.method.views)
     self.graphdef, _ = nnx.split(model)
     self.optimizer = agent.optimizer(config.train)
@@ -187,9 +188,8 @@ class Trainer:
     before = state.task
     q = self.q_maps(state.params, before.obs)
     occupied = agent.surface_height(before.obs.depth, self.method.views) > t.explore_min_height
-    maps = agent.rule_maps(q, before.obs.depth, self.method, self.config)
-    action, explored = agent.epsilon_greedy(maps, before.changed, occupied, eps, k_act,
-                                            self.method)
+    action, explored = self.decision.explore(q, before.obs.depth, before.changed, occupied, eps,
+                                             k_act)
     # Fresh tabletops for the reserve settle in the primitive's physics loop, when it runs low.
     b = action.primitive.shape[0]
     refill = reserve_lib.needs_refill(state.reserve, b)

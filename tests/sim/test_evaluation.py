@@ -420,7 +420,8 @@ def test_no_repeat_takes_the_next_best_action_instead_of_a_failed_one(setup):
   q_maps = lambda obs: jnp.broadcast_to(ramp, (obs.depth.shape[0], 2, 1, r, r))
   logs = {}
   for no_repeat in (False, True):
-    policy = runner.greedy_actor(q_maps, methods.get('grasp_only'), config, no_repeat)
+    policy = runner.greedy_actor(q_maps, agent.Decision.of(methods.get('grasp_only'), config),
+                                 no_repeat)
     logs[no_repeat] = runner.run_logs(runner.evaluate(task, policy, layouts, keys, 10))
   attempts = config.env.max_failures + 1
   assert [(g.actions, g.repeated_failures) for g in logs[False]] == [(attempts, attempts - 1)] * 2

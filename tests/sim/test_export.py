@@ -247,7 +247,7 @@ def test_other_networks_export_round_trip_with_onnx_parity(method, overrides, tm
   color = jax.random.uniform(kc, (1, views, side, side, 3))
   depth = 0.1 * jax.random.uniform(kd, (1, views, side, side)) ** 4
   q = jax.jit(lambda c, d: model(c, d))(color, depth)
-  maps = agent.rule_maps(q, depth, trainer.method, config)
+  maps = agent.Decision.of(trainer.method, config).maps(q, depth)
   session = ort.InferenceSession(str(paths['onnx']), providers=['CPUExecutionProvider'])
   names = [o['name'] for o in model_json['onnx']['outputs']]
   suppress = method == 'cpg' or config.network.suppress
@@ -259,7 +259,7 @@ def test_other_networks_export_round_trip_with_onnx_parity(method, overrides, tm
     assert float(np.abs(got['q'] - np.asarray(q)).max()) < TOLERANCE
     np.testing.assert_allclose(got[model_json['action_rule']['maps']], np.asarray(maps),
                                rtol=1e-5, atol=TOLERANCE)
-    want, score = agent.decide(q, depth, jnp.array([changed]), trainer.method, config)
+    want, score = agent.Decision.of(trainer.method, config).act(q, depth, jnp.array([changed]))
     assert list(got['action'][0]) == [int(getattr(want, k)[0])
                                       for k in ('primitive', 'rotation', 'row', 'col')]
     assert abs(float(got['value'][0]) - float(score[0])) < 1e-4
@@ -303,13 +303,39 @@ def test_a_policy_that_fills_unseen_cells_acts_alike_in_jax_and_deploy(tmp_path)
     # network's maps may pick another cell of that score.
     assert got.primitive == want.primitive == ('grasp' if changed else 'push')
     assert abs(got.q - want.q) < 1e-4, (got, want)
-    jax_maps = agent.rule_maps(jnp.asarray(jax_policy.q_maps(filled_color, filled_depth))[None],
-                               jnp.asarray(filled_depth)[None], jax_policy.network.method, config)
+    jax_maps = agent.Decision.of(jax_policy.network.method, config).maps(
+        jnp.asarray(jax_policy.q_maps(filled_color, filled_depth))[None],
+        jnp.asarray(filled_depth)[None])
     k, r, c = got.rotation, got.row, got.col
     prim = 1 if changed else 0
     assert abs(float(jax_maps[0, prim, k, r, c]) - want.q) < 1e-4
   with pytest.raises(policy.PolicyError, match='seen is needed'):
     jax_policy.act(color, depth, True)
+
+
+def test_the_rule_is_one_decision_that_every_actor_reads(run, states, monkeypatch, tmp_path):
+  """A toy setting of the action rule written in one place, `agent.Decision.maps` (every score at
+  rotation 1, cell (3, 5) raised by 100): `Policy.act`, the evaluation's greedy actor and the
+  exported graph all take that cell, as the training step explores through the same object."""
+  from mvcoba_jax.evaluation.protocols import FROZEN
+  from mvcoba_jax.evaluation.sources import Source
+  real = agent.Decision.maps
+  monkeypatch.setattr(agent.Decision, 'maps', lambda self, q, depth: real(self, q, depth).at[
+      :, :, 1, 3, 5].add(100.0))
+  trainer, workdir, _ = run
+  color, depth = states['rendered']
+  loaded = policy.load(workdir)
+  config, model, _ = loaded
+  action = loaded.act(np.asarray(color[0]), np.asarray(depth[0]), True)
+  assert (action.rotation, action.row, action.col) == (1, 3, 5)
+  obs = perception.Observation(color=color, depth=depth, seen=depth >= 0)
+  actor = Source(model.method, config, model).actor(config, FROZEN)
+  chosen, _ = actor.act(None, obs, jnp.array([True]), jnp.ones(1, bool), None, None)
+  assert (int(chosen.rotation[0]), int(chosen.row[0]), int(chosen.col[0])) == (1, 3, 5)
+  session = ort.InferenceSession(str(export.export(workdir, tmp_path / 'toy')['onnx']),
+                                 providers=['CPUExecutionProvider'])
+  assert list(onnx_outputs(session, color, depth, True)['action'][0][1:]) == [1, 3, 5]
+  assert isinstance(trainer.decision, agent.Decision)
 
 
 def test_export_folder_loads_back_as_the_same_policy(run, exported, parity, states):
@@ -482,8 +508,9 @@ def test_a_loaded_policy_acts_as_evaluation_does():
         ('push', 'grasp')[int(chosen.primitive[0])], int(chosen.rotation[0]),
         int(chosen.row[0]), int(chosen.col[0]))
     res, half = config.perception.heightmap_resolution, config.scene.workspace_half
-    assert decision.x == pytest.approx(-half + (decision.col + 0.5) * res, abs=1e-6)
-    assert decision.z == pytest.approx(state['depth'][:, decision.row, decision.col].max())
+    x, _, z = decision.position
+    assert x == pytest.approx(-half + (decision.col + 0.5) * res, abs=1e-6)
+    assert z == pytest.approx(state['depth'][:, decision.row, decision.col].max())
   assert loaded.act(state['color'], state['depth'], True, seen=state['seen']).primitive == 'grasp'
 
 

@@ -90,8 +90,8 @@ def test_a_new_rule_reaches_the_exported_graph_and_one_it_cannot_trace_is_refuse
     depth = jax.random.uniform(jax.random.PRNGKey(2), (1, 2, side, side)) * 0.05
     action, value = session.run(['action', 'value'], {
         'color': np.asarray(color), 'depth': np.asarray(depth), 'changed': np.array([True])})
-    want, score = agent.decide(model(color, depth), depth, jnp.array([True]), model.method,
-                               config)
+    want, score = agent.Decision.of(model.method, config).act(model(color, depth), depth,
+                                                              jnp.array([True]))
     assert action[0].tolist() == [PUSH, int(want.rotation[0]), int(want.row[0]),
                                   int(want.col[0])]
     assert abs(float(value[0]) - float(score[0])) < 1e-4

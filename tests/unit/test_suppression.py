@@ -48,7 +48,7 @@ def test_the_rule_never_picks_a_suppressed_action(seed):
   q = jax.random.normal(jax.random.PRNGKey(seed), (3, 2, K, SIDE, SIDE))
   depth = jnp.asarray(heights)[:, None]  # one view
   config = resolve('default')
-  maps = agent.rule_maps(q, depth, methods.get('cpg'), config)
+  maps = agent.Decision.of(methods.get('cpg'), config).maps(q, depth)
   action = agent.greedy_actions(maps, jnp.ones(3, bool), methods.get('cpg'))
   f = np.asarray(factors(jnp.asarray(heights)))
   picked = f[np.arange(3), np.asarray(action.primitive), np.asarray(action.rotation),
@@ -64,7 +64,7 @@ def test_the_rule_never_picks_a_suppressed_action(seed):
 def test_with_nothing_allowed_the_raw_maps_decide():
   q = jax.random.normal(jax.random.PRNGKey(0), (1, 2, K, SIDE, SIDE))
   empty = jnp.zeros((1, 1, SIDE, SIDE))
-  maps = agent.rule_maps(q, empty, methods.get('cpg'), resolve('default'))
+  maps = agent.Decision.of(methods.get('cpg'), resolve('default')).maps(q, empty)
   np.testing.assert_array_equal(np.asarray(maps), np.asarray(q))
   assert not np.any(np.asarray(maps) == networks.NO_ACTION)
 
@@ -78,7 +78,7 @@ def test_mvcoba_with_suppression_grasps_and_pushes_only_where_allowed():
   q = jax.random.normal(jax.random.PRNGKey(7), (2, 2, K, SIDE, SIDE))
   depth = jnp.stack([heights, heights], axis=1)  # two views
   method, config = methods.get('mvcoba'), resolve('default', ['network.suppress=true'])
-  maps = agent.rule_maps(q, depth, method, config)
+  maps = agent.Decision.of(method, config).maps(q, depth)
   f = np.asarray(factors(heights))
   for changed, primitive in ((True, GRASP), (False, PUSH)):
     action = agent.greedy_actions(maps, jnp.full(2, changed), method)
@@ -86,7 +86,7 @@ def test_mvcoba_with_suppression_grasps_and_pushes_only_where_allowed():
     picked = f[np.arange(2), primitive, np.asarray(action.rotation), np.asarray(action.row),
                np.asarray(action.col)]
     assert (picked > 0).all(), picked
-  assert agent.rule_maps(q, depth, method, resolve('reproduction')) is q
+  assert agent.Decision.of(method, resolve('reproduction')).maps(q, depth) is q
 
 
 def test_a_given_primitive_with_nothing_allowed_keeps_its_raw_map():
