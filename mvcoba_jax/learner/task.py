@@ -48,12 +48,13 @@ def _whole(fn: Callable) -> Callable:
   return fn
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
+@dataclasses.dataclass(frozen=True)
 class Task:
   """Everything the task reads, built once from a config (`build`) and held by training and
   evaluation alike, so nothing past it reads the config: the tabletops, how the cameras' pictures
-  become heightmaps, what actions earn, and the views whose heights place an action. Hashed by
-  identity: the compiled programs that run it take it as a static argument.
+  become heightmaps, what actions earn, and the views whose heights place an action. A value:
+  two tasks of equal settings are equal, so the compiled programs that take it as a static
+  argument compile once for both.
 
   `per_env` arguments wrap per-tabletop work (`Trainer.per_env`: each device its own share)."""
   env: Tabletop

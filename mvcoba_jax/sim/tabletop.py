@@ -115,7 +115,9 @@ def make_backend(scene: Scene, parking: physics.Parking):
 
 
 class Tabletop:
-  """Static description of the environment; its methods are pure functions of the state."""
+  """Static description of the environment; its methods are pure functions of the state. A
+  value: tabletops of one config and number of frames are equal (and hash alike), since all
+  they hold is built from those two."""
 
   def __init__(self, config: TabletopConfig, frames: int = 0):
     """`frames`: how many snapshots of each primitive `step` returns (for videos; 0: none)."""
@@ -151,6 +153,13 @@ class Tabletop:
                                          for s in slot_shapes], jnp.float32)
     if config.env.packed_share > 0:
       self._bank = packed_bank(idx.slot_shapes, config.env.num_objects)
+
+  def __eq__(self, other) -> bool:
+    return type(other) is type(self) and (self.config, self.frames) == (other.config,
+                                                                         other.frames)
+
+  def __hash__(self) -> int:
+    return hash((self.config, self.frames))
 
   # ----------------------------------------------------------------------------- physics core
   def _place_gripper(self, sim: SimState, pose) -> SimState:

@@ -1,4 +1,5 @@
 """Evaluation end to end on the tiny preset: cases loaded, run, scored; vmapped == one by one."""
+import dataclasses
 import json
 import pathlib
 
@@ -54,6 +55,19 @@ def test_cases_are_run_and_scored(setup):
     assert r.completed == (r.picked == r.objects)
   m = metrics.case_metrics(logs)
   assert 0.0 <= m['grasp_success'] <= 100.0 and m['runs'] == 2
+
+
+def test_a_task_of_equal_settings_runs_the_programs_compiled_for_the_first(setup):
+  """Tasks are values: one built again from an equal config equals the first, and the compiled
+  start of a batch (`runner.begin`, the task a static argument) serves it without compiling."""
+  _, task, _, layouts, keys, _, config = setup
+  again = Task.build(dataclasses.replace(config), (0, 1))
+  assert again == task and hash(again) == hash(task) and again is not task
+  assert Task.build(config, (0,)) != task
+  runner.begin(task, layouts, keys, MAX_ACTIONS, False)
+  compiled = runner.begin._cache_size()
+  runner.begin(again, layouts, keys, MAX_ACTIONS, False)
+  assert runner.begin._cache_size() == compiled
 
 
 def test_vmapped_evaluation_equals_cases_one_by_one(setup):
