@@ -1,9 +1,12 @@
 """The paths README.md and docs/ name exist, and the symbols README.md and the guides in docs/
-name resolve: a file moved or a function renamed takes its mentions along."""
+name resolve: a file moved or a function renamed takes its mentions along. The results the pages
+state are recomputed from the results.json they rest on."""
 import dataclasses
 import importlib
 import pathlib
 import re
+
+import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 TOP = ('mvcoba_jax/', 'tests/', 'docs/', 'examples/', 'benchmarks/', 'experiments/', 'pretrained/',
@@ -155,3 +158,73 @@ def test_every_separation_a_page_states_is_recomputed_from_its_results():
       assert any(round(g, digits) == float(gap) for g in gaps), f'{name}: gap {gap}'
       checked += 1
   assert checked >= 3
+
+
+def _readme_paragraph(start: str) -> str:
+  """The README paragraph that begins with `start`, its lines joined by single spaces."""
+  text = (ROOT / 'README.md').read_text()
+  return ' '.join(text[text.index(start):].split('\n\n')[0].split())
+
+
+def _check_default_claim(text: str) -> None:
+  """Every figure the README states of the default preset is recomputed from the claim it names
+  (`recipe/winning/claim-short_push`, joined with the reproduction for the gaps): the grasp
+  success intervals per suite and their suite, the share of objects picked, each gap over the
+  reproduction's MV-COBA beside its suite, the seed count, the seeds' spread and the runs
+  completed; so a changed figure, a gap moved to another suite or pair, or a direction turned
+  fails."""
+  from mvcoba_jax.evaluation import intervals, report
+  claim = report.joined_report([str(ROOT / 'docs/results/recipe/winning/claim-short_push'),
+                                str(ROOT / 'docs/results/reproduction')])
+  ours = {suite: report.seed_intervals(rows, minimum=1) for suite, rows in claim.items()}
+  default = {suite: next(e for m, e in entries.items() if m == 'mvcoba')
+             for suite, entries in ours.items()}
+  reproduction = {suite: next(e for m, e in entries.items() if m.startswith('mvcoba {'))
+                  for suite, entries in ours.items()}
+  whole = lambda ci: f'{ci[0]:.0f} [{ci[1]:.0f}, {ci[2]:.0f}]'
+  words = {'random': 'on heaps', 'ordered': 'on packed blocks',
+           'occluded': 'under held-out occluders', 'vpg': "on VPG's cases"}
+  assert f'{default["random"]["seeds"]} seeds x 3000 actions' in text
+  stated = ', '.join(f'{whole(default[s]["grasp_success"])} {words[s]}' for s in words)
+  assert stated.replace(f', {whole(default["vpg"]["grasp_success"])}',
+                        f' and {whole(default["vpg"]["grasp_success"])}') in text, stated
+  picked = sorted(round(default[s]['objects_picked'][0]) for s in words)
+  assert f'picking {picked[0]}-{picked[-1]} % of the objects' in text
+  assert "its grasp success is above the comparison's MV-COBA" in text
+  short = {'ordered': 'packed blocks', 'occluded': 'occluders', 'vpg': "VPG's cases"}
+  for suite, name in short.items():
+    high, low = default[suite]['grasp_success'], reproduction[suite]['grasp_success']
+    assert intervals.separated(high, low, (5, 5)), suite
+    assert f'{name} (gap {high[1] - low[2]:.2f})' in text, suite
+  spread = max(abs(v - default[s]['grasp_success'][0])
+               for s in words for v in default[s]['per_seed']['grasp_success'])
+  assert spread < 6 and 'every seed within 6 points of the mean' in text
+  completed = default['random']['per_seed']['completion']
+  within = max(abs(v - default['random']['completion'][0]) for v in completed)
+  assert f'within {within:.1f} on heaps' in text
+  assert (f'{whole(default["random"]["completion"])} % of heap runs and '
+          f'{whole(default["vpg"]["completion"])} % of VPG\'s clear the table') in text
+
+
+def test_the_readmes_claim_of_the_default_preset_is_its_results():
+  _check_default_claim(_readme_paragraph('**The default preset**'))
+
+
+@pytest.mark.parametrize('stated, mutated', [
+    ('(gap 3.55)', '(gap 3.75)'),  # another pair's gap (MVP's on the heaps)
+    ('packed blocks (gap 3.55), occluders (gap 1.15)',
+     'packed blocks (gap 1.15), occluders (gap 3.55)'),
+    ('is above the comparison', 'is below the comparison'),
+    ('94 [90, 99] on packed blocks', '95 [90, 99] on packed blocks'),
+    ('5 seeds x 3000 actions', '4 seeds x 3000 actions'),
+    ('picking 98-100 %', 'picking 97-100 %'),
+    ('within 13.3 on heaps', 'within 8.7 on heaps'),
+])
+def test_a_changed_claim_of_the_default_preset_fails(stated, mutated):
+  """The mutations a results sentence must not survive: a gap swapped with another pair's or
+  suite's, a flipped direction, a changed figure, a wrong seed count, a range that no longer
+  holds."""
+  text = _readme_paragraph('**The default preset**')
+  assert stated in text
+  with pytest.raises(AssertionError):
+    _check_default_claim(text.replace(stated, mutated))
