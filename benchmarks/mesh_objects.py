@@ -105,6 +105,7 @@ def main():
       row['vs_blocks'] = round(row['primitives_per_s'] / rows['blocks']['primitives_per_s'], 3)
     result[backend] = rows
   result['decomposition'] = decomposition()
+  result['settings']['load_average_1min_at_end'] = round(os.getloadavg()[0], 2)
   if jax_cache:
     os.environ['MVCOBA_JAX_CACHE'] = jax_cache
   print(json.dumps(result, indent=1))
