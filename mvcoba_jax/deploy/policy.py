@@ -80,8 +80,9 @@ def check_graph(session, spec: model_file.ModelFile, onnx_file) -> None:
     missing = sorted(set(needs[kind]) - set(named))
     extra = sorted(set(named) - set(needs[kind])) if kind == 'input' else []
     if missing or extra:
+      more = ' and more' if kind == 'output' else ''  # an export may add outputs (q, score)
       raise DeployError(f'{onnx_file}: the graph\'s {kind}s are {", ".join(sorted(named))}; an '
-                        f'export\'s are {", ".join(needs[kind])}{" and more" * (kind == "output")}')
+                        f'export\'s are {", ".join(needs[kind])}{more}')
     for name, (dtype, shape) in needs[kind].items():
       got = list(named[name].shape)
       if named[name].type != dtype or len(got) != len(shape) or any(
