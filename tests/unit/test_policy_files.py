@@ -320,3 +320,34 @@ def test_the_deploy_policys_other_arguments_are_typed(tmp_path):
   zeros = np.zeros((2, 112, 112), np.float32)
   with pytest.raises(DeployError, match=r'calibration=\{\}: a deploy.Calibration expected'):
     OnnxPolicy(tmp_path).act(zeros[..., None].repeat(3, -1), zeros, zeros > 0, True, {})
+
+
+def test_fuzzed_deploy_arguments_are_refused_in_one_line_or_accepted(tmp_path):
+  """The deploy API's yes-or-no and count arguments (fixed seed): `changed`, `grasped` and
+  `failed_grasps` of odd types and values are each refused in one DeployError line, or taken
+  when they are what the API documents (a bool, numpy's included; a count of 0 or more)."""
+  import random
+
+  from mvcoba_jax.deploy import DeployError, OnnxPolicy  # noqa: PLC0415
+  shutil.copy('pretrained/mvcoba/model.json', tmp_path / 'model.json')
+  _constant_graph(tmp_path, EXPORT_INPUTS, EXPORT_OUTPUTS)
+  onnx = OnnxPolicy(tmp_path)
+  rng = random.Random(0)
+  odd = [True, False, np.True_, np.False_, None, 0, 1, -1, 1.5, '1', 'no', [], [True],
+         np.asarray(True), np.int64(2), 2 ** 70, float('nan')]
+  depth = np.zeros((2, 112, 112), np.float32)
+  frame = (depth, depth > 0)
+  valid = lambda flag: isinstance(flag, (bool, np.bool_))
+  for _ in range(200):
+    grasped, failed = rng.choice(odd), rng.choice(odd)
+    count = isinstance(failed, (int, np.integer)) and not valid(failed) and failed >= 0
+    try:
+      onnx.changed(frame, frame, grasped=grasped, failed_grasps=failed)
+      assert (grasped is None or valid(grasped)) and count, (grasped, failed)
+    except DeployError as e:
+      assert '\n' not in str(e) and not ((grasped is None or valid(grasped)) and count), (
+          grasped, failed, str(e))
+    changed = rng.choice(odd)
+    with pytest.raises(DeployError) as e:  # a real flag gets as far as the calibration
+      onnx.act(depth[..., None].repeat(3, -1), depth, depth > 0, changed, None)
+    assert ('True or False' in str(e.value)) != valid(changed), (changed, str(e.value))
