@@ -38,14 +38,14 @@ class Rig:
 class SimulatedRig(Rig):
   """The simulator as cameras and robot: a random drop of the policy's training scene."""
 
-  def __init__(self, model: dict, seed: int = 0, gripper: str | None = None):
+  def __init__(self, trained: dict, seed: int = 0, gripper: str | None = None):
     import jax  # noqa: PLC0415 (the simulator's needs, not the loop's)
     from mvcoba_jax import config as config_lib  # noqa: PLC0415
     from mvcoba_jax.sim import cameras  # noqa: PLC0415
     from mvcoba_jax.sim.primitives import Action as SimAction  # noqa: PLC0415
     from mvcoba_jax.sim.tabletop import Tabletop  # noqa: PLC0415
     self.jax, self.cameras, self.sim_action = jax, cameras, SimAction
-    config = config_lib.from_dict(model['config'])
+    config = config_lib.from_dict(trained)  # the policy's training config (model.json's)
     if gripper is not None:  # the robot's own gripper, which may not be the policy's
       config = config_lib.override(config, f'scene.gripper={gripper}')
     self.env = Tabletop(config.tabletop)
@@ -120,7 +120,7 @@ def main(argv=None) -> int:
   try:
     policy = OnnxPolicy(args.model, failed_grasp_retries=args.failed_grasp_retries,
                         gripper=args.gripper, other_gripper=args.other_gripper)
-    rig = SimulatedRig(policy.model, args.seed, args.gripper)
+    rig = SimulatedRig(policy.spec.config, args.seed, args.gripper)
     run(rig, policy, calibration_from_dict(rig.calibration), args.actions)
   except DeployError as e:
     print(f'error: {e}', file=sys.stderr)

@@ -101,18 +101,16 @@ def describe(config: Config, method: methods.Method, params: dict[str, np.ndarra
              workdir, commit: str | None = None, measured: dict | None = None) -> dict:
   """The content of model.json of a network of `method` trained in `config`; `commit` names the
   code that trained it when known, `measured` is `figures`' answer."""
-  spec = model_file_of(config, method)
+  spec = model_file_of(config, method, step)
   side, k, num_views = spec.grid_size, spec.num_rotations, spec.num_views
   suppress = agent.Decision.of(method, config).suppress
   half = spec.workspace_half_m
   described = {
       'format': model_file.FORMAT,
-      'source': {'workdir': str(pathlib.Path(workdir).resolve()), 'checkpoint_step': step,
-                 'seed': config.seed, 'commit': commit},
+      'source': {'workdir': str(pathlib.Path(workdir).resolve()), 'seed': config.seed,
+                 'commit': commit},
       'figures': measured or {},
-      'method': config.network.method,
       'network': dataclasses.asdict(config.network),
-      'config': json.loads(json.dumps(config_lib.to_dict(config))),  # as the file holds it
       'objects': {'trained_on': shapes.pool_record(config.scene.pool),
                   'meaning': 'the object slots of training\'s scene: the VPG blocks by name, '
                              'mesh objects by path and the SHA-256 of their files'},
@@ -175,9 +173,9 @@ def describe(config: Config, method: methods.Method, params: dict[str, np.ndarra
   return _merged(described, model_file.as_json(spec))
 
 
-def model_file_of(config: Config, method: methods.Method) -> model_file.ModelFile:
-  """What a runtime acting on an export of a `method` network trained in `config` reads from its
-  model.json (`deploy.model_file`: written and read through the same fields)."""
+def model_file_of(config: Config, method: methods.Method, step: int) -> model_file.ModelFile:
+  """What a runtime reads from the model.json of a `method` network trained in `config` for
+  `step` actions (`deploy.model_file`: written and read through the same fields)."""
   k = config.env.num_rotations
   p = config.perception
   return model_file.ModelFile(
@@ -190,7 +188,9 @@ def model_file_of(config: Config, method: methods.Method) -> model_file.ModelFil
       change_area=p.change_area, failed_grasp_changes=p.failed_grasp_changes,
       failed_grasp_retries=p.failed_grasp_retries,
       fill_unseen=p.fill_unseen, push_length_m=config.env.push_length,
-      gripper=json.loads(json.dumps(dataclasses.asdict(config.scene.gripper))))
+      gripper=json.loads(json.dumps(dataclasses.asdict(config.scene.gripper))),
+      method=method.name, checkpoint_step=step,
+      config=json.loads(json.dumps(config_lib.to_dict(config))))  # as the file holds it
 
 
 def _merged(described: dict, fields: dict) -> dict:

@@ -3,7 +3,6 @@ or from a folder that `mvcoba-export` wrote (model.json, params.npz), which trav
 training state."""
 from __future__ import annotations
 
-import functools
 import hashlib
 import json
 import pathlib
@@ -28,7 +27,6 @@ from mvcoba_jax.sim.contract import push_length
 from mvcoba_jax.learner.checkpoint import CheckpointError, Checkpoints, incompatibilities
 
 PARAM_LIMIT = 1e6  # no trained weight comes near this; a larger one is damage, not learning
-STEP_LIMIT = 10 ** 12  # actions: more than any training here could take
 
 
 class PolicyError(Error):
@@ -189,18 +187,15 @@ def flat_params(model: networks.QNetwork) -> dict[str, np.ndarray]:
   return out
 
 
-def _described(described: dict, config: Config):
+def _described(spec: model_file.ModelFile, config: Config):
   """(key, what model.json says, what its own config gives) of the fields model.json derives
   from its config: a hand-edited config that the ONNX graph and the arrays were not made for
   disagrees with them."""
   side = round(2 * config.scene.workspace_half / config.perception.heightmap_resolution)
-  got = lambda *keys: functools.reduce(lambda d, k: d.get(k) if isinstance(d, dict) else None,
-                                       keys, described)
-  return [('method', got('method'), config.network.method),
-          ('rotations.num_rotations', got('rotations', 'num_rotations'),
-           config.env.num_rotations),
-          ('heightmap.grid_size', got('heightmap', 'grid_size'), side),
-          ('heightmap.num_views', got('heightmap', 'num_views'), len(config.scene.cameras))]
+  return [('method', spec.method, config.network.method),
+          ('rotations.num_rotations', spec.num_rotations, config.env.num_rotations),
+          ('heightmap.grid_size', spec.grid_size, side),
+          ('heightmap.num_views', spec.num_views, len(config.scene.cameras))]
 
 
 def load_exported(folder) -> Policy:
@@ -213,16 +208,14 @@ def load_exported(folder) -> Policy:
   folder = pathlib.Path(folder)
   model_path, params_path = folder / 'model.json', folder / 'params.npz'
   try:
-    described = model_file.read(folder).raw
+    spec = model_file.read(folder)
   except DeployError as e:
     raise PolicyError(str(e)) from None
+  step = spec.checkpoint_step
   try:
-    config = _config(described['config'], model_path)
-    step = described['source']['checkpoint_step']
-    if isinstance(step, bool) or not isinstance(step, int) or not 0 <= step <= STEP_LIMIT:
-      raise ValueError(f'source.checkpoint_step {str(step)[:40]!r} is not a step count')
+    config = _config(spec.config, model_path)
     untied = [f'{key} {value!r} (its config gives {own!r})'
-              for key, value, own in _described(described, config) if value != own]
+              for key, value, own in _described(spec, config) if value != own]
     if untied:
       raise ValueError('its description and its config disagree: ' + '; '.join(untied))
     model = networks.build_network(config.network, config.env.num_rotations, nnx.Rngs(0))

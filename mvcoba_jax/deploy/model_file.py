@@ -45,7 +45,9 @@ class ModelFile:
   fill_unseen: bool  # each view's unseen cells filled from the others first
   push_length_m: float  # how far a push slides along its angle, as in training
   gripper: dict  # the gripper it trained with (config.scene.gripper): name, fingers, opening
-  raw: dict | None = dataclasses.field(default=None, compare=False)  # the whole file as read
+  method: str  # the network's method (`methods.names()`)
+  checkpoint_step: int  # the training actions behind the parameters
+  config: dict  # the whole training config as saved (`config.from_dict` builds it)
 
 
 # Where model.json holds each field of `ModelFile`, its JSON type and range, and the value a file
@@ -72,6 +74,9 @@ FIELDS = {
     'fill_unseen': ('config.perception.fill_unseen', bool, None),
     'push_length_m': ('config.env.push_length', float, RANGES['env.push_length']),
     'gripper': ('config.scene.gripper', dict, None),
+    'method': ('method', str, None),
+    'checkpoint_step': ('source.checkpoint_step', int, (0, 10 ** 12)),  # more than any training
+    'config': ('config', dict, None),
 }
 # The RG2-like gripper of every export written before the gripper was a config of its own
 # (`sim.config.GripperConfig`'s defaults; tests/unit/test_policy_files.py holds them equal).
@@ -86,14 +91,16 @@ _REQUIRED = object()  # a field without a value in ABSENT
 
 def as_json(spec: ModelFile) -> dict:
   """`spec`'s fields as model.json nests them (`FIELDS`): what `export.describe` writes."""
-  out = {'format': FORMAT if spec.graph_decides else FORMATS[1]}
+  out = {'format': FORMAT if spec.graph_decides else FORMATS[1],
+         'config': json.loads(json.dumps(spec.config))}  # a copy: the fields below go into it
   for name, (dotted, _, _) in FIELDS.items():
     *parents, key = dotted.split('.')
     section = out
     for part in parents:
       section = section.setdefault(part, {})
     value = getattr(spec, name)
-    section[key] = list(value) if isinstance(value, tuple) else value
+    if name != 'config':
+      section[key] = list(value) if isinstance(value, tuple) else value
   return out
 
 
@@ -152,7 +159,7 @@ def checked(raw, path: pathlib.Path) -> ModelFile:
     raise DeployError(f'{path}: config.perception.heightmap_resolution is not '
                       'heightmap.resolution_m')
   spec = ModelFile(**{**got, 'angles_rad': tuple(float(a) for a in angles),
-                      'views_used': tuple(used)}, graph_decides=fmt == FORMAT, raw=raw)
+                      'views_used': tuple(used)}, graph_decides=fmt == FORMAT)
   return acting_rule(spec, where=f'{path}: config.perception')
 
 
@@ -177,6 +184,10 @@ def acting_rule(spec: ModelFile, failed_grasp_changes: bool | None = None,
 
 
 
+KINDS = {int: 'a whole number', float: 'a number', str: 'a string', bool: 'true or false',
+         list: 'a list', dict: 'an object'}  # as a JSON reader names them
+
+
 class _Fields:
   """Dotted fields of a JSON object, each checked for its type and range as it is read."""
 
@@ -195,7 +206,7 @@ class _Fields:
     if kind is float and _real(value):
       value = float(value)
     elif type(value) is not kind:  # bool is not int here
-      raise DeployError(f'{self.path}: {dotted} {str(value)[:40]!r}: a {kind.__name__} expected')
+      raise DeployError(f'{self.path}: {dotted} {str(value)[:40]!r}: {KINDS[kind]} expected')
     if bounds and not bounds[0] <= value <= bounds[1]:
       raise DeployError(f'{self.path}: {dotted} {value!r} outside {bounds[0]:g}..{bounds[1]:g}')
     return value

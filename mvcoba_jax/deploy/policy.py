@@ -109,10 +109,9 @@ class OnnxPolicy:
     self.spec = model_file.acting_rule(model_file.read(folder), failed_grasp_changes,
                                        failed_grasp_retries)
     if not self.spec.graph_decides:
-      raise DeployError(f'{folder / "model.json"}: format {self.spec.raw["format"]!r}: its graph '
+      raise DeployError(f'{folder / "model.json"}: format {model_file.FORMATS[1]!r}: its graph '
                         'leaves the action rule to the runtime; export it again '
                         f'(mvcoba-export --checkpoint {folder} --out NEW_FOLDER)')
-    self.model = self.spec.raw
     if gripper is not None and not _flag('other_gripper', other_gripper,
                                          'act with a gripper other than the policy\'s'):
       check_gripper(self.gripper, gripper, folder)

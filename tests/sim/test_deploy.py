@@ -155,7 +155,7 @@ def test_the_robot_loop_example_runs_against_the_simulator(onnx):
   spec = importlib.util.spec_from_file_location('robot_loop', ROOT / 'examples' / 'robot_loop.py')
   example = importlib.util.module_from_spec(spec)
   spec.loader.exec_module(example)
-  rig = example.SimulatedRig(onnx.model, seed=3)
+  rig = example.SimulatedRig(onnx.spec.config, seed=3)
   before = rig.objects()
   records = example.run(rig, onnx, calibration_from_dict(rig.calibration), 5, say=lambda _: None)
   assert len(records) == 5 and all('primitive' in r for r in records)

@@ -370,8 +370,8 @@ def test_an_export_its_readers_would_refuse_is_not_written(run, tmp_path, monkey
   """model.json is read back as the deploy path reads it before anything is written: a field
   that reader refuses (here primitives numbered against the graph) fails the export in one line."""
   real = export.model_file_of
-  monkeypatch.setattr(export, 'model_file_of', lambda config, method: dataclasses.replace(
-      real(config, method), push=1, grasp=0))
+  monkeypatch.setattr(export, 'model_file_of', lambda config, method, step: dataclasses.replace(
+      real(config, method, step), push=1, grasp=0))
   with pytest.raises(policy.PolicyError, match='its export would be refused by its readers .*'
                                                'primitives push 1, grasp 0'):
     export.export(run[1], tmp_path / 'out')

@@ -92,11 +92,12 @@ def test_non_finite_and_wrong_dtype_params(saved, tmp_path):
      'config.perception.heightmap_resolution is not heightmap.resolution_m'),
     (lambda d: d['config']['perception'].update(heightmap_resolution=0.003)
      or d['heightmap'].update(resolution_m=0.003, grid_size=149), 'must tile'),
-    (lambda d: d['source'].update(checkpoint_step='x'), 'not an export'),
+    (lambda d: d['source'].update(checkpoint_step='x'),
+     "source.checkpoint_step 'x': a whole number expected"),
     (lambda d: d['source'].update(checkpoint_step=float('inf')), 'Infinity is not a number'),
-    (lambda d: d['source'].update(checkpoint_step=-3), "checkpoint_step '-3'"),
+    (lambda d: d['source'].update(checkpoint_step=-3), 'source.checkpoint_step -3 outside'),
     (lambda d: d.update(format='other/1'), "format 'other/1'"),
-    (lambda d: d['source'].update(checkpoint_step=10 ** 30), "checkpoint_step '1000000"),
+    (lambda d: d['source'].update(checkpoint_step=10 ** 30), 'checkpoint_step 1000000'),
     (lambda d: d['config']['env'].update(num_rotations=8),
      'rotations.num_rotations 16 (its config gives 8)'),
 ])
@@ -202,7 +203,7 @@ def test_model_json_is_written_and_read_through_one_schema(saved, tmp_path):
   from mvcoba_jax.deploy import DeployError, model_file
   _, folder, _ = saved
   config = resolve('tiny')
-  written = export.model_file_of(config, Trainer(config).method)
+  written = export.model_file_of(config, Trainer(config).method, 8)
   assert model_file.read(folder) == written
   assert written.height_unit_m == 1e-5 and written.below_table_m == -0.005
   for dotted, value in (('height_unit_m', 1e-3), ('below_table_m', -0.05)):
