@@ -7,7 +7,7 @@ training runs in `learner/train.py`, evaluations in `evaluation/session.py` (`Ev
     result = mvcoba_jax.train(resolve('tiny'), 'runs/tiny')
     report = mvcoba_jax.evaluate(['runs/tiny'], ['occluded'], runs=2, out='runs/tiny-eval')
     policy = mvcoba_jax.load_policy('runs/tiny')
-    decision = policy.act(color, depth, changed=True)
+    action = policy.act(color, depth, changed=True)  # a deploy.Action, workspace frame
 """
 from __future__ import annotations
 
