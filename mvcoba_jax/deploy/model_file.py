@@ -155,7 +155,8 @@ def checked(raw, path: pathlib.Path) -> ModelFile:
                       f'{high:g} m expected')
   if (folder / got['onnx_file']).resolve().parent != folder.resolve():
     raise DeployError(f'{path}: onnx.file {got["onnx_file"]!r} lies outside the export\'s folder')
-  if abs(field.get('config.perception.heightmap_resolution', float, (1e-4, 0.05)) - res) > 1e-12:
+  if abs(field.get('config.perception.heightmap_resolution', float,
+                   RANGES['perception.heightmap_resolution']) - res) > 1e-12:
     raise DeployError(f'{path}: config.perception.heightmap_resolution is not '
                       'heightmap.resolution_m')
   spec = ModelFile(**{**got, 'angles_rad': tuple(float(a) for a in angles),
@@ -181,7 +182,6 @@ def acting_rule(spec: ModelFile, failed_grasp_changes: bool | None = None,
     raise DeployError(f'{where}: failed_grasp_retries {retries} needs failed_grasp_changes false '
                       '(with it true a failed grasp that moved the scene is change anyway)')
   return dataclasses.replace(spec, failed_grasp_changes=changes, failed_grasp_retries=retries)
-
 
 
 KINDS = {int: 'a whole number', float: 'a number', str: 'a string', bool: 'true or false',
