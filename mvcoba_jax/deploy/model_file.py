@@ -53,6 +53,7 @@ class ModelFile:
 # Where model.json holds each field of `ModelFile`, its JSON type and range, and the value a file
 # written before the field existed means: `read` and `as_json` both go through this one table.
 FIELDS = {
+    'config': ('config', dict, None),  # first: the config.* fields below are set inside it
     'push': ('primitives.push', int, (0, 1)),
     'grasp': ('primitives.grasp', int, (0, 1)),
     'num_rotations': ('rotations.num_rotations', int, RANGES['env.num_rotations']),
@@ -76,7 +77,6 @@ FIELDS = {
     'gripper': ('config.scene.gripper', dict, None),
     'method': ('method', str, None),
     'checkpoint_step': ('source.checkpoint_step', int, (0, 10 ** 12)),  # more than any training
-    'config': ('config', dict, None),
 }
 # The RG2-like gripper of every export written before the gripper was a config of its own
 # (`sim.config.GripperConfig`'s defaults; tests/unit/test_policy_files.py holds them equal).
@@ -91,16 +91,14 @@ _REQUIRED = object()  # a field without a value in ABSENT
 
 def as_json(spec: ModelFile) -> dict:
   """`spec`'s fields as model.json nests them (`FIELDS`): what `export.describe` writes."""
-  out = {'format': FORMAT if spec.graph_decides else FORMATS[1],
-         'config': json.loads(json.dumps(spec.config))}  # a copy: the fields below go into it
+  out = {'format': FORMAT if spec.graph_decides else FORMATS[1]}
   for name, (dotted, _, _) in FIELDS.items():
     *parents, key = dotted.split('.')
     section = out
     for part in parents:
       section = section.setdefault(part, {})
-    value = getattr(spec, name)
-    if name != 'config':
-      section[key] = list(value) if isinstance(value, tuple) else value
+    value = getattr(spec, name)  # tuples as lists, dicts copied: later fields are set inside them
+    section[key] = json.loads(json.dumps(value)) if isinstance(value, (tuple, dict)) else value
   return out
 
 

@@ -136,7 +136,8 @@ class GripperConfig:
   def __post_init__(self):
     check(self, 'scene.gripper.', {
         'finger_width': Between(0.002, 0.1), 'finger_thickness': Between(0.001, 0.05),
-        'finger_length': Between(0.01, 0.2), 'max_opening': Between(*RANGES['scene.gripper.max_opening']),
+        'finger_length': Between(0.01, 0.2),
+        'max_opening': Between(*RANGES['scene.gripper.max_opening']),
         'palm': Between(0.001, 0.5), 'finger_force': Between(0, 1000, low_open=True),
         'finger_friction': Between(0, 10, low_open=True)})
     if self.max_opening <= 2 * self.finger_thickness:
@@ -267,7 +268,8 @@ class EnvConfig:
 
   def __post_init__(self):
     check(self, 'env.', {
-        'num_objects': Between(1, 256), 'num_rotations': Between(*RANGES['env.num_rotations']), 'drop': DROPS,
+        'num_objects': Between(1, 256), 'num_rotations': Between(*RANGES['env.num_rotations']),
+        'drop': DROPS,
         'heap_half': Between(0.02, 1), 'occluded_share': Between(0, 1),
         'packed_share': Between(0, 1),
         'settle_steps': Between(0, 100000), 'drop_margin': Between(0, 0.2),

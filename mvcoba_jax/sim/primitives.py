@@ -14,7 +14,7 @@ from flax import struct
 
 from mvcoba_jax.sim.config import EnvConfig, GripperConfig
 from mvcoba_jax.sim.geometry import rotation_angle
-from mvcoba_jax.sim.contract import GRASP, PUSH, push_length  # noqa: F401  (primitives.PUSH, .GRASP)
+from mvcoba_jax.sim.contract import GRASP, PUSH, push_length  # noqa: F401  (primitives.PUSH)
 
 FINGER_SQUEEZE = -0.01  # target past closed: the fingers keep squeezing what they hold
 
