@@ -49,8 +49,9 @@ def main(argv=None) -> int:
   try:
     config = config_lib.from_arguments(args)
     scene = config.scene
-    if physics.device_problem(scene):  # as training refuses it
-      raise config_lib.ConfigError(physics.device_problem(scene))
+    problem = physics.device_problem(scene)
+    if problem:  # as training refuses it
+      raise config_lib.ConfigError(problem)
     case = read_case(args.case, scene.workspace_half, scene.workspace_top, args.blocks)
     # the slots the case needs
     task = Task.build(suite_config(config, pool_for([case])),
