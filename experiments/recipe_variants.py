@@ -109,6 +109,9 @@ VARIANTS = {
     # Issue 82's per-gripper training: today's default for each gripper preset.
     'gripper_robotiq_2f85': ['--config', 'default', '--set', 'scene.gripper=robotiq_2f85'],
     'gripper_franka_hand': ['--config', 'default', '--set', 'scene.gripper=franka_hand'],
+    # Issue 80's heap losses: today's default with MuJoCo's noslip pass, against `cut_default` at
+    # the same seeds (benchmarks/heap_creep.py: settled heaps creep without it).
+    'noslip': ['--config', 'default', '--set', 'scene.noslip_iterations=10'],
 }
 # variant -> the variant whose finished run it resumes to more actions. The same as training
 # that long in one go: nothing in the recipe reads the total (constant learning rate, exploration

@@ -73,7 +73,7 @@ LEGACY = {TrainConfig: {'target': 'network', 'failed_grasp_reward': 0.5,
                           'push_room': 0.0},
           PerceptionConfig: {'failed_grasp_changes': True, 'fill_unseen': False,
                              'failed_grasp_retries': 0},
-          SceneConfig: {'gripper': dataclasses.asdict(GripperConfig())}}
+          SceneConfig: {'gripper': dataclasses.asdict(GripperConfig()), 'noslip_iterations': 0}}
 
 # Fields that choose where a run computes, not what it computes: a saved config that lacks them
 # (written before they existed) runs on this machine's choice without a warning.

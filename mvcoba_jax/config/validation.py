@@ -64,6 +64,9 @@ def _parts_fit(config: Config) -> None:
                         f'{PHASE_LIMIT_S:g} s per phase of a primitive or a reset')
   if scene.backend in ('mjx', 'warp'):
     _contact_caps_fit(scene, env)
+  if scene.backend == 'mjx' and scene.noslip_iterations:
+    raise ConfigError(f'scene.noslip_iterations={scene.noslip_iterations} needs the native or '
+                      'warp backend: MJX has no noslip pass (it would run without one)')
   if train.grasp_symmetry and env.num_rotations % 2:
     raise ConfigError(f'train.grasp_symmetry needs an even env.num_rotations (the grasp turned '
                       f'half way); it is {env.num_rotations}')

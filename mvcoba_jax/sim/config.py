@@ -164,6 +164,10 @@ class SceneConfig:
   timestep: float = 0.004
   iterations: int = 4
   ls_iterations: int = 6
+  # MuJoCo's noslip pass after each step's solve: soft contacts let a settled heap creep (objects
+  # on others slide centimetres in a minute with no action and some leave the table,
+  # benchmarks/heap_creep.py); the pass stops that slip. Native and Warp; MJX has no such pass.
+  noslip_iterations: int = 0
   # Contact stiffness (MuJoCo solref time constant, s). 2 x timestep, the stiffest MuJoCo allows:
   # with its default 0.02 the fingers press packed blocks millimetres into the table and lift
   # them with no push (benchmarks/ordered_graspability.py).
@@ -192,6 +196,7 @@ class SceneConfig:
         'pool': Between(0, 256), 'workspace_half': Between(*RANGES['scene.workspace_half']),
         'workspace_top': Between(0.05, 2.0), 'timestep': Between(0.0001, 0.02),
         'iterations': Between(1, 1000), 'ls_iterations': Between(1, 1000),
+        'noslip_iterations': Between(0, 1000),
         'contact_timeconst': Between(0, 1, low_open=True),
         'friction': Between(0, 10, low_open=True),
         'press_force': Between(0, 60, low_open=True),

@@ -84,7 +84,8 @@ def build_mjcf(scene: SceneConfig) -> str:
   return f"""<mujoco model="mvcoba_tabletop">
   <compiler angle="radian" autolimits="true"/>
   <option timestep="{scene.timestep:.6g}" iterations="{scene.iterations}"
-          ls_iterations="{scene.ls_iterations}" solver="Newton" jacobian="sparse"
+          ls_iterations="{scene.ls_iterations}" noslip_iterations="{scene.noslip_iterations}"
+          solver="Newton" jacobian="sparse"
           cone="pyramidal" integrator="implicitfast"/>
   <custom>
     <numeric name="max_contact_points" data="{scene.max_contact_points}"/>

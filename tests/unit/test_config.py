@@ -48,6 +48,7 @@ def test_presets_are_valid(preset):
     ('scene.pool=cube:1,cube:2', 'expected distinct shapes'),
     ('scene.pool=lego:2', "scene.pool: unknown shape 'lego'; known: prism, arch"),
     ('scene.contact_timeconst=0.001', 'below 2 x scene.timestep'),
+    ('scene.noslip_iterations=-1', 'scene.noslip_iterations=-1: allowed range [0, 1000]'),
     ('scene.cameras=1', 'cannot be set from the command line'),
     ('perception.change_min=0.5', 'perception.change_min=0.5 must be below'),
     ('network.method=nope', "network.method='nope': allowed values are"),
@@ -150,6 +151,13 @@ def test_saved_config_without_the_recipe_fields_keeps_the_paper_text_recipe():
   assert not config.network.pad_to_diagonal
   assert config.network.shared_stages == 0
   assert defaulted(saved, config) == {}
+
+
+def test_noslip_pass_is_refused_on_mjx_which_would_run_without_it():
+  assert resolve('default', ['scene.noslip_iterations=3']).scene.noslip_iterations == 3
+  with pytest.raises(ConfigError, match='scene.noslip_iterations=3 needs the native or warp '
+                                        'backend: MJX has no noslip pass'):
+    resolve('default', ['scene.backend=mjx', 'scene.noslip_iterations=3'])
 
 
 def test_recipe_settings_that_do_not_fit_together_are_refused():
