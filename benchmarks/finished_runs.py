@@ -82,7 +82,7 @@ def whole_suite(suite: str, checkpoint: str, runs: int) -> dict:
   for name, smallest in (('one_batch', n), ('smaller_batches', 8)):
     t = time.perf_counter()
     logs[name] = runner.run_logs(runner.evaluate(task, policy, layouts, keys, 60,
-                                                 smallest=smallest))
+                                                 smallest=smallest), task)
     row[f'{name}_s'] = time.perf_counter() - t  # compiles included: each batch size compiles
   row['smaller_over_one'] = row['smaller_batches_s'] / row['one_batch_s']
   row['runs_that_differ'] = sum(a != b for a, b in zip(logs['one_batch'], logs['smaller_batches']))

@@ -41,7 +41,7 @@ def suite_costs(suite: str, source, runs: int) -> dict:
     policy = source.actor(config, PROTOCOLS[protocol])
     for timing in ('first_s', 'warm_s'):
       start = time.perf_counter()
-      logs = runner.run_logs(runner.evaluate(task, policy, layouts, keys, 60))
+      logs = runner.run_logs(runner.evaluate(task, policy, layouts, keys, 60), task)
       row[f'{protocol}_{timing}'] = time.perf_counter() - start
     actions = sum(log.actions for log in logs)
     row[f'{protocol}_actions'] = actions

@@ -23,6 +23,27 @@ class RunLog:
   # Actions that repeated a failed action of the run exactly (primitive, rotation and cell) with
   # nothing changed since; None in results written before it was counted.
   repeated_failures: int | None = None
+  # Per shape (`SHAPE_COUNTS`; NO_OBJECT for actions at none): what `shape_counts` gives; None
+  # in results written before it was counted.
+  shapes: dict[str, dict[str, int]] | None = None
+
+
+# A shape's counts in a run: objects in play at the start, objects picked, grasps aimed at one
+# (the object lifted, else the one under the grasp's point), those that lifted something, and
+# pushes that moved one farthest (`evaluation.runner`).
+SHAPE_COUNTS = ('objects', 'picked', 'grasps', 'lifted', 'pushes')
+NO_OBJECT = '(no object)'
+
+
+def shape_counts(by_slot: list[list[int]], slot_shapes: tuple[str, ...]) -> dict:
+  """{shape: {count: n}} of one run from its per-slot counts (M + 1 rows, the last for actions
+  at no object), shapes with nothing counted left out."""
+  out = {}
+  for name, row in zip(list(slot_shapes) + [NO_OBJECT], by_slot):
+    totals = out.setdefault(name, dict.fromkeys(SHAPE_COUNTS, 0))
+    for key, n in zip(SHAPE_COUNTS, row):
+      totals[key] += int(n)
+  return {name: c for name, c in out.items() if any(c.values())}
 
 
 def run_log(data, where: str) -> RunLog:
@@ -35,7 +56,7 @@ def run_log(data, where: str) -> RunLog:
   unknown = sorted(set(data) - fields)
   if unknown:
     raise ValueError(f'{where}: unknown fields {", ".join(unknown)[:80]}')
-  for name in fields:
+  for name in fields - {'shapes'}:
     value = data.get(name)
     if name == 'repeated_failures' and value is None:
       continue
@@ -45,6 +66,8 @@ def run_log(data, where: str) -> RunLog:
     elif isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2 ** 31:
       raise ValueError(f'{where}.{name}: expected a count, got {str(value)[:40]!r}')
   log = RunLog(**data)
+  if log.shapes is not None:
+    _check_shapes(log, where)
   if not log.grasp_successes <= log.grasp_attempts <= log.actions:
     raise ValueError(f'{where}: grasp_successes {log.grasp_successes} <= grasp_attempts '
                      f'{log.grasp_attempts} <= actions {log.actions} does not hold')
@@ -54,6 +77,46 @@ def run_log(data, where: str) -> RunLog:
     raise ValueError(f'{where}: picked {log.picked} and lost {log.lost} do not fit objects '
                      f'{log.objects} (completed: {log.completed})')
   return log
+
+
+def _check_shapes(log: RunLog, where: str) -> None:
+  """A run's per-shape counts: counts that fit each other and sum to the run's own."""
+  if not isinstance(log.shapes, dict):
+    raise ValueError(f'{where}.shapes: expected an object of shapes, got {str(log.shapes)[:40]!r}')
+  for name, counts in log.shapes.items():
+    at = f'{where}.shapes[{name[:60]!r}]'
+    if not isinstance(counts, dict) or set(counts) != set(SHAPE_COUNTS):
+      raise ValueError(f'{at}: expected the counts {", ".join(SHAPE_COUNTS)}')
+    if any(isinstance(n, bool) or not isinstance(n, int) or not 0 <= n < 2 ** 31
+           for n in counts.values()):
+      raise ValueError(f'{at}: expected counts, got {str(counts)[:60]}')
+    if counts['lifted'] > counts['grasps'] or counts['picked'] > counts['objects']:
+      raise ValueError(f'{at}: lifted <= grasps and picked <= objects do not hold')
+  total = lambda key: sum(c[key] for c in log.shapes.values())
+  for key, whole in (('objects', log.objects), ('picked', log.picked),
+                     ('grasps', log.grasp_attempts), ('lifted', log.grasp_successes),
+                     ('pushes', log.actions - log.grasp_attempts)):
+    if total(key) != whole:
+      raise ValueError(f'{where}.shapes: {key} sum to {total(key)}, the run counts {whole}')
+
+
+def shape_metrics(runs: list[RunLog]) -> dict | None:
+  """Per shape, over `runs`: objects in play at the start and the share picked, grasps aimed at
+  it and the share that lifted something, pushes that moved it most; None when a run lacks the
+  counts (results written before they were kept)."""
+  if not runs or any(r.shapes is None for r in runs):
+    return None
+  sums = {}
+  for r in runs:
+    for name, counts in r.shapes.items():
+      totals = sums.setdefault(name, dict.fromkeys(SHAPE_COUNTS, 0))
+      for key in SHAPE_COUNTS:
+        totals[key] += counts[key]
+  rate = lambda a, b: 100.0 * a / b if b else float('nan')
+  return {name: {'objects': c['objects'], 'objects_picked': rate(c['picked'], c['objects']),
+                 'grasps': c['grasps'], 'grasp_success': rate(c['lifted'], c['grasps']),
+                 'pushes': c['pushes']}
+          for name, c in sorted(sums.items(), key=lambda kv: (kv[0] == NO_OBJECT, kv[0]))}
 
 
 def case_metrics(runs: list[RunLog]) -> dict:

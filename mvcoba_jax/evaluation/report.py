@@ -92,6 +92,10 @@ def suite_tables(suite: str, rows: dict[str, dict]) -> list[str]:
   the table of intervals over training seeds when a method was evaluated from several."""
   cases = list(dict.fromkeys(c for result in rows.values() for c in result['cases']))
   tables = [f'### {suite}: {label}\n\n' + table(rows, key, label, cases) for key, label in METRICS]
+  shaped = {label: row['by_shape'] for label, row in rows.items() if row.get('by_shape')}
+  if shaped:
+    tables.append(f'### {suite}: by shape: grasp success % (grasps aimed at it) / objects '
+                  'picked % / pushes that moved it most\n\n' + shape_table(shaped))
   over_seeds = seed_intervals(rows)
   if over_seeds:
     tables.insert(0, f'### {suite}: over training seeds, mean [95% t interval over '
@@ -200,12 +204,28 @@ def interval_table(over_seeds: dict[str, dict]) -> str:
                              for m, e in over_seeds.items()])
 
 
+def shape_table(by_label: dict[str, dict]) -> str:
+  """Rows: the labels; columns: every shape any row counted (`metrics.shape_metrics`)."""
+  shapes = list(dict.fromkeys(s for row in by_label.values() for s in row))
+  head = '| method | ' + ' | '.join(cell(s) for s in shapes) + ' |\n|---|' + '---|' * len(shapes)
+  def entry(m):
+    if m is None:
+      return ''
+    picked = '' if math.isnan(m['objects_picked']) else f'{m["objects_picked"]:.1f}'
+    lifted = '-' if math.isnan(m['grasp_success']) else f'{m["grasp_success"]:.1f}'
+    return f'{lifted} ({m["grasps"]}) / {picked or "-"} / {m["pushes"]}'
+  return '\n'.join([head] + [f'| {cell(label)} | ' + ' | '.join(entry(row.get(s)) for s in shapes)
+                             + ' |' for label, row in by_label.items()])
+
+
 def scored(by_case: dict[str, list[metrics.RunLog]], wall_s: float) -> dict:
   """A method's row of a suite: metrics per case and their means, with the runs they came from."""
   per_case = {name: metrics.case_metrics(logs) for name, logs in by_case.items()}
-  return {'cases': per_case, 'mean': metrics.suite_average(per_case), 'wall_s': wall_s,
-          'runs': {name: [dataclasses.asdict(log) for log in logs]
-                   for name, logs in by_case.items()}}
+  row = {'cases': per_case, 'mean': metrics.suite_average(per_case), 'wall_s': wall_s,
+         'runs': {name: [dataclasses.asdict(log) for log in logs]
+                  for name, logs in by_case.items()}}
+  by_shape = metrics.shape_metrics([log for logs in by_case.values() for log in logs])
+  return row if by_shape is None else {**row, 'by_shape': by_shape}
 
 
 def starts(by_case: dict[str, list[metrics.RunLog]], listed: dict[str, int]) -> tuple[str, str]:

@@ -21,6 +21,7 @@ from flax import nnx, struct
 
 from mvcoba_jax import perception
 from mvcoba_jax.config import Config
+from mvcoba_jax.evaluation import metrics
 from mvcoba_jax.evaluation.metrics import RunLog
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.learner import replay as replay_lib
@@ -93,6 +94,10 @@ class Runs:
   objects: jnp.ndarray
   finished: jnp.ndarray
   completed: jnp.ndarray
+  # Per object slot (N, M + 1, 5), the last row for actions at no object: objects in play at the
+  # start, objects picked, grasps aimed at it, those that lifted something, pushes that moved
+  # it most (`_by_slot`).
+  by_slot: jnp.ndarray
   # Failed actions since the scene last changed (N, F, 4: primitive, rotation, row, col), the
   # first `tried` of them, and the actions that repeated one of them exactly.
   failed: jnp.ndarray
@@ -207,6 +212,8 @@ def begin(task: Task, layouts: Layout, keys, max_actions: int, record: bool) -> 
   runs = Runs(actions=zeros, grasp_attempts=zeros, grasp_successes=zeros, picked=zeros,
               lost=zeros, objects=jnp.sum(states.in_play, axis=1, dtype=jnp.int32),
               finished=jnp.zeros(n, bool), completed=jnp.zeros(n, bool),
+              by_slot=jnp.pad(states.in_play.astype(jnp.int32)[..., None],
+                              ((0, 0), (0, 1), (0, 4))),
               failed=jnp.zeros((n, env.config.env.max_failures + 1, 4), jnp.int32),
               tried=zeros, repeated_failures=zeros)
   if record:
@@ -274,7 +281,12 @@ def lockstep(task: Task, actor: Actor, batch: Batch, record: bool, progress,
   is_grasp = action.primitive == agent.GRASP
   picked = count(runs.picked, info.picked)
   failed, tried, repeated = _repeats(runs, action, out, active)
-  runs = runs.replace(
+  by_slot = runs.by_slot + jnp.where(
+      active[:, None, None],
+      jax.vmap(functools.partial(_by_slot, task.env))(before.env, after.env,
+                                                      task.to_world(action, obs.depth), info),
+      0)
+  runs = runs.replace(by_slot=by_slot, 
       actions=count(runs.actions, 1), grasp_attempts=count(runs.grasp_attempts, is_grasp),
       grasp_successes=count(runs.grasp_successes, info.grasp_success), picked=picked,
       lost=count(runs.lost, info.lost), finished=runs.finished | out.done,
@@ -294,6 +306,31 @@ def lockstep(task: Task, actor: Actor, batch: Batch, record: bool, progress,
 
 
 _lockstep = jax.jit(lockstep, static_argnames=('task', 'actor', 'record', 'progress'))
+
+
+PUSHED = 0.01  # m: a push moved an object when it slid this far
+
+
+def _by_slot(env, before, after, world, info):
+  """One action's counts per object slot of one run (M + 1, 5), as `Runs.by_slot` sums them. A
+  grasp is aimed at the object it lifted (the one under its point if it lifted several), or
+  when it lifted none at the object under its point (`Tabletop.object_at`); a push at the
+  object it moved farthest, when that is `PUSHED` or more; either at the last row when at none."""
+  m = before.in_play.shape[0]
+  picked = before.in_play & ~after.in_play & ~info.left_workspace
+  under = env.object_at(before, jnp.stack([world.x, world.y, world.z]))
+  lifted_under = (under >= 0) & picked[jnp.maximum(under, 0)]
+  grasped = jnp.where(info.grasp_success & ~lifted_under, jnp.argmax(picked), under)
+  slid = jnp.linalg.norm(env.object_positions(after)[:, :2] - env.object_positions(before)[:, :2],
+                         axis=-1)
+  slid = jnp.where(before.in_play, slid, 0.0)
+  pushed = jnp.where(jnp.max(slid) >= PUSHED, jnp.argmax(slid), -1)
+  is_grasp = world.primitive == agent.GRASP
+  target = jnp.where(is_grasp, grasped, pushed)
+  row = jnp.where(target < 0, m, target)
+  counts = jnp.stack([0, 0, is_grasp, is_grasp & info.grasp_success, ~is_grasp]).astype(jnp.int32)
+  return (jnp.zeros((m + 1, 5), jnp.int32).at[row].set(counts)
+          .at[:m, 1].add(picked.astype(jnp.int32)))
 
 
 def _repeats(runs: Runs, action: agent.PixelAction, out: Outcome, active):
@@ -350,13 +387,16 @@ def evaluate(task: Task, actor: Actor, layouts: Layout, keys, max_actions: int,
     batch = jax.tree.map(lambda x: x[keep] if jnp.ndim(x) else x, batch)
 
 
-def run_logs(runs: Runs) -> list[RunLog]:
-  """Host-side per-run records for the metrics."""
-  r = jax.tree.map(lambda x: x.tolist(), runs)
+def run_logs(runs: Runs, task: Task) -> list[RunLog]:
+  """Host-side per-run records for the metrics, of runs of `task`."""
+  slot_shapes = task.env.scene.index.slot_shapes
+  r = jax.tree.map(lambda x: x.tolist(), runs.replace(trace=None, carry=None))
   return [RunLog(actions=r.actions[i], grasp_attempts=r.grasp_attempts[i],
                  grasp_successes=r.grasp_successes[i], objects=r.objects[i], picked=r.picked[i],
                  lost=r.lost[i], completed=r.completed[i],
-                 repeated_failures=r.repeated_failures[i]) for i in range(len(r.actions))]
+                 repeated_failures=r.repeated_failures[i],
+                 shapes=metrics.shape_counts(r.by_slot[i], slot_shapes))
+          for i in range(len(r.actions))]
 
 
 def losses(trace: Trace, names: list[str], task: Task) -> list[dict]:

@@ -236,7 +236,7 @@ def _row(spec: EvalSpec, suite: str, cases, label: str, source: sources_lib.Sour
       bar.update(int(done) - bar.n)
     result = runner.evaluate(task, actor, layouts, keys, spec.max_actions,
                              record=spec.save_visuals or spec.video, progress=progress)
-    logs = runner.run_logs(result)
+    logs = runner.run_logs(result, task)
   names = [c.name for c in cases]
   run_names = [f'{n}_run{r}' for n in names for r in range(runs)]
   where = pathlib.Path(pathlib.Path(suite).name) / label.replace(':', '_')

@@ -35,6 +35,14 @@ def quat_mul(a, b):
   ], axis=-1)
 
 
+def in_frame(quat, v):
+  """Vectors `v` (..., 3) of the world in the frame that unit quaternions `quat` (..., 4) turn
+  the world's axes to: conj(quat) v quat."""
+  conj = quat * jnp.asarray([1.0, -1.0, -1.0, -1.0], quat.dtype)
+  pure = jnp.concatenate([jnp.zeros_like(v[..., :1]), v], axis=-1)
+  return quat_mul(quat_mul(conj, pure), quat)[..., 1:]
+
+
 def euler_xyz_matrix(a: float, b: float, c: float) -> np.ndarray:
   """R = Rx(a) Ry(b) Rz(c) as a 3x3 numpy matrix (the convention of VPG's test cases)."""
   ca, sa, cb, sb, cc, sc = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(c), np.sin(c)

@@ -14,7 +14,7 @@ from flax import struct
 
 from mvcoba_jax.sim import arrangements, cameras, occluders, physics, primitives, shapes
 from mvcoba_jax.sim.config import TabletopConfig
-from mvcoba_jax.sim.geometry import quat_mul, yaw_quat
+from mvcoba_jax.sim.geometry import in_frame, quat_mul, yaw_quat
 from mvcoba_jax.sim.physics import SimState
 from mvcoba_jax.sim.primitives import Action
 from mvcoba_jax.sim.scene import GRIPPER_PARK, Scene, build_scene
@@ -58,6 +58,9 @@ def packed_bank(slot_shapes: tuple[str, ...], limit: int, size: int = PACKED_BAN
       xy[n, slot], yaw[n, slot] = (x, y), np.radians(part_yaw)
   return {k: jnp.asarray(v) for k, v in
           (('in_play', in_play), ('xy', xy), ('yaw', yaw), ('radius', radius))}
+
+
+OBJECT_AT_MARGIN = 0.005  # m: a surface point seen within this of an object's box is on it
 
 
 @struct.dataclass
@@ -147,6 +150,8 @@ class Tabletop:
     self._rest_quat = jnp.asarray([s.rest_quat for s in slot_shapes], jnp.float32)
     self._rest_half_height = jnp.asarray([0.5 * s.rest_extent[2] for s in slot_shapes],
                                          jnp.float32)
+    self._half_extent = jnp.asarray([0.5 * np.asarray(s.extent) for s in slot_shapes],
+                                    jnp.float32)
     self._radius = jnp.asarray([shapes.footprint_radius(s.name) for s in slot_shapes],
                                jnp.float32)
     self._bounding_radius = jnp.asarray([0.5 * np.linalg.norm(s.rest_extent)
@@ -405,3 +410,14 @@ class Tabletop:
   def object_positions(self, state: EnvState):
     """(M, 3) centre of every slot of one environment (parked slots report their parking spot)."""
     return state.sim.qpos[self._qpos_idx[:, :3]]
+
+  def object_at(self, state: EnvState, point):
+    """The slot of the object in play under `point` (x, y, z on the surface the cameras saw) of
+    one environment, -1 for none: the topmost whose bounding box, grown by OBJECT_AT_MARGIN on
+    each side, holds the point (its own frame: a box lying askew on a heap is found as it lies).
+    What an evaluation counts a failed grasp against, per shape."""
+    pose = state.sim.qpos[self._qpos_idx]
+    local = in_frame(pose[:, 3:], jnp.asarray(point, jnp.float32) - pose[:, :3])
+    inside = state.in_play & jnp.all(jnp.abs(local) <= self._half_extent + OBJECT_AT_MARGIN,
+                                     axis=-1)
+    return jnp.where(jnp.any(inside), jnp.argmax(jnp.where(inside, pose[:, 2], -jnp.inf)), -1)

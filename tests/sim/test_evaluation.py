@@ -16,7 +16,7 @@ from mvcoba_jax.evaluation.sources import Source
 from mvcoba_jax.cli import eval as eval_cli
 from mvcoba_jax.config import resolve
 from mvcoba_jax.learner import agent
-from mvcoba_jax.sim.scenarios import case_to_layout, read_case, stack_layouts
+from mvcoba_jax.sim.scenarios import case_slots, case_to_layout, read_case, stack_layouts
 from mvcoba_jax.learner.task import Task
 from mvcoba_jax.sim.tabletop import Tabletop
 from mvcoba_jax.suites import SUITES_DIR
@@ -45,8 +45,8 @@ def setup(tmp_path_factory):
 
 
 def test_cases_are_run_and_scored(setup):
-  _, _, _, _, _, runs, _ = setup
-  logs = runner.run_logs(runs)
+  _, task, _, _, _, runs, _ = setup
+  logs = runner.run_logs(runs, task)
   assert [r.objects for r in logs] == [2, 3]
   for r in logs:
     assert 1 <= r.actions <= MAX_ACTIONS
@@ -55,6 +55,43 @@ def test_cases_are_run_and_scored(setup):
     assert r.completed == (r.picked == r.objects)
   m = metrics.case_metrics(logs)
   assert 0.0 <= m['grasp_success'] <= 100.0 and m['runs'] == 2
+
+
+def test_each_shape_counts_its_objects_and_the_actions_aimed_at_it(setup):
+  """The heuristic grasps at the highest point, an object's top: every grasp is counted against
+  a shape, each lifted object against its own; the counts sum to the run's (run_log checks)."""
+  _, task, _, _, _, runs, _ = setup
+  logs = runner.run_logs(runs, task)
+  assert [{s: c['objects'] for s, c in r.shapes.items()} for r in logs] == [
+      {'cube': 1, 'flat_box': 1}, {'cube': 2, 'flat_box': 1}]
+  for r in logs:
+    assert metrics.run_log(dataclasses.asdict(r), 'run') == r
+    assert metrics.NO_OBJECT not in r.shapes or not r.shapes[metrics.NO_OBJECT]['grasps']
+    assert all(c['picked'] <= c['lifted'] for c in r.shapes.values())
+  by_shape = metrics.shape_metrics(logs)
+  assert sum(m['grasps'] for m in by_shape.values()) == sum(r.grasp_attempts for r in logs)
+  broken = dataclasses.asdict(logs[0])
+  broken['shapes']['cube']['objects'] += 1
+  with pytest.raises(ValueError, match='objects sum to 3, the run counts 2'):
+    metrics.run_log(broken, 'run')
+
+
+def test_object_at_finds_the_object_under_a_point_as_it_lies(setup):
+  """`Tabletop.object_at` in the pair case: the cube's top; the flat box (10 x 5 cm, turned 30
+  degrees) along its length and across, in its own frame; the table beside it."""
+  _, task, _, layouts, keys, _, _ = setup
+  env = task.env
+  pair = jax.tree.map(lambda x: x[:1], layouts)
+  state = jax.tree.map(lambda x: x[0], jax.jit(lambda l, k: suite_cases.start(env, l, k)[0])(
+      pair, keys[:1]))
+  cube, box = case_slots(read_case(setup[0] / 'pair.scn'), env)
+  at = jax.jit(env.object_at)
+  c, s = np.cos(np.radians(30)), np.sin(np.radians(30))
+  assert int(at(state, (0.05, 0.0, 0.05))) == cube
+  for along, across, expect in ((0.045, 0.0, box), (0.06, 0.0, -1), (0.0, 0.02, box),
+                                (0.0, 0.035, -1)):
+    point = (-0.1 + along * c - across * s, 0.1 + along * s + across * c, 0.025)
+    assert int(at(state, point)) == expect, (along, across)
 
 
 def test_a_task_of_equal_settings_runs_the_programs_compiled_for_the_first(setup):
@@ -97,11 +134,11 @@ def one_and_three(setup, tmp_path):
 def test_a_run_that_finished_early_leaves_the_others_as_they_were_alone(setup, one_and_three):
   """A finished run steps on with its table emptied (cheaper); the batch's other runs do not
   notice."""
-  _, _, run, _, keys, _, _ = setup
+  _, task, run, _, keys, _, _ = setup
   one, three = one_and_three
   together = run(stack_layouts([one, three]), keys)
   alone = run(jax.tree.map(lambda x: jnp.stack([x] * 2), three), jnp.stack([keys[1]] * 2))
-  first, second = runner.run_logs(together)
+  first, second = runner.run_logs(together, task)
   assert first.completed and first.actions < second.actions == MAX_ACTIONS
   for a, b in zip(jax.tree.leaves(alone), jax.tree.leaves(together)):
     assert (np.asarray(a)[1] == np.asarray(b)[1]).all()
@@ -119,7 +156,7 @@ def test_runs_moved_to_a_smaller_batch_end_as_in_the_whole_batch(setup, one_and_
   run = lambda smallest: runner.evaluate(task, policy, four, keys, MAX_ACTIONS, record=True,
                                          smallest=smallest)
   whole, moved = run(smallest=4), run(smallest=1)
-  assert sum(r.actions < MAX_ACTIONS for r in runner.run_logs(moved)) >= 2
+  assert sum(r.actions < MAX_ACTIONS for r in runner.run_logs(moved, task)) >= 2
   for a, b in zip(jax.tree.leaves(whole.replace(trace=None)),
                   jax.tree.leaves(moved.replace(trace=None))):
     assert (np.asarray(a) == np.asarray(b)).all()
@@ -371,12 +408,12 @@ def test_repeated_failed_actions_are_counted_per_run(setup):
   stubborn = runner.Frozen(lambda obs, changed, keys, failed: agent.PixelAction(
       primitive=zeros(obs) + agent.GRASP, rotation=zeros(obs), row=zeros(obs), col=zeros(obs)))
   runs = runner.evaluate(task, stubborn, layouts, keys, 10)
-  logs = runner.run_logs(runs)
+  logs = runner.run_logs(runs, task)
   attempts = config.env.max_failures + 1
   assert [r.actions for r in logs] == [attempts] * 2
   assert [r.repeated_failures for r in logs] == [attempts - 1] * 2
   assert metrics.case_metrics(logs)['repeated_failures'] == attempts - 1
-  assert all(r.repeated_failures == 0 for r in runner.run_logs(heuristic))
+  assert all(r.repeated_failures == 0 for r in runner.run_logs(heuristic, task))
 
 
 @pytest.fixture(scope='module')
@@ -409,14 +446,15 @@ def test_online_runs_learn_each_from_its_own_transitions(online):
       np.testing.assert_array_equal(np.asarray(a)[0], np.asarray(b)[i])
 
 
-def test_a_finished_run_learns_no_more(online):
+def test_a_finished_run_learns_no_more(online, setup):
   """A run on an empty table finishes with its first action, which has no next state to learn
   from: it ends with the trained weights, whether the batch stops at 3 actions or 6; the other
   run, still going at 3, learned more by 6."""
   policy, run, layouts, keys = online
+  task = setup[1]
   empty = layouts.replace(in_play=layouts.in_play.at[0].set(False))
   short, long = run(empty, keys, 3), run(empty, keys, 6)
-  assert [r.actions for r in runner.run_logs(short)] == [1, 3]
+  assert [r.actions for r in runner.run_logs(short, task)] == [1, 3]
   params = lambda runs, i: [np.asarray(x)[i] for x in jax.tree.leaves(runs.carry.params)]
   start = [np.asarray(x) for x in jax.tree.leaves(policy.params)]
   for runs in (short, long):
@@ -436,7 +474,7 @@ def test_no_repeat_takes_the_next_best_action_instead_of_a_failed_one(setup):
   for no_repeat in (False, True):
     policy = runner.greedy_actor(q_maps, agent.Decision.of(methods.get('grasp_only'), config),
                                  no_repeat)
-    logs[no_repeat] = runner.run_logs(runner.evaluate(task, policy, layouts, keys, 10))
+    logs[no_repeat] = runner.run_logs(runner.evaluate(task, policy, layouts, keys, 10), task)
   attempts = config.env.max_failures + 1
   assert [(g.actions, g.repeated_failures) for g in logs[False]] == [(attempts, attempts - 1)] * 2
   assert [(g.actions, g.repeated_failures) for g in logs[True]] == [(attempts, 0)] * 2
