@@ -26,7 +26,7 @@ from onnxruntime.capi import onnxruntime_pybind11_state as ort_errors
 
 from mvcoba_jax.deploy import DeployError, model_file
 from mvcoba_jax.deploy.policy import check_graph
-from mvcoba_jax.deploy.heightmaps import filled
+from mvcoba_jax.sim.contract import filled
 from mvcoba_jax.sim.contract import pixel_to_world, push_length
 
 

@@ -32,7 +32,7 @@ from mvcoba_jax import config as config_lib
 from mvcoba_jax.config import Config
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.deploy import DeployError, model_file
-from mvcoba_jax.deploy.heightmaps import BELOW_TABLE, HEIGHT_UNIT
+from mvcoba_jax.sim.contract import BELOW_TABLE, HEIGHT_UNIT
 from mvcoba_jax.policy import PolicyError, fingerprint, flat_params, load
 from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.geometry import rotation_angle

@@ -1,6 +1,6 @@
 """Heightmaps from the cameras' point clouds, and MV-COBA's change observation.
 
-Each camera's hits are projected into the workspace grid (`geometry.world_to_pixel`), keeping
+Each camera's hits are binned into the workspace grid (`sim.contract.binned`), keeping
 the highest point per cell; cells a camera does not see stay 0, as does the table. One int32
 scatter-max on a packed key (height in 10 um units, then the geom id) gives the height and the
 colour of the top surface in one pass.
@@ -11,9 +11,8 @@ import jax.numpy as jnp
 from flax import struct
 
 from mvcoba_jax.config import PerceptionConfig, SceneConfig
-from mvcoba_jax.deploy.heightmaps import BELOW_TABLE, HEIGHT_UNIT, changed_views, filled
 from mvcoba_jax.sim import cameras
-from mvcoba_jax.sim.geometry import world_to_pixel
+from mvcoba_jax.sim.contract import HEIGHT_UNIT, binned, changed_views, filled
 
 GEOM_SLOTS = 1024  # geom ids must stay below this to fit the packed key
 
@@ -44,14 +43,11 @@ def heightmap(image: cameras.CameraImage, colors, perception: PerceptionConfig,
               scene: SceneConfig):
   """(R, R, 3) colour, (R, R) depth heightmap and (R, R) seen mask of one camera's picture."""
   side = grid_size(perception, scene)
-  half, top = scene.workspace_half, scene.workspace_top
-  res = perception.heightmap_resolution
-  x, y, z = image.points[..., 0], image.points[..., 1], image.points[..., 2]
-  row, col = world_to_pixel(x, y, res, half)
-  valid = (image.hit & (row >= 0) & (row < side) & (col >= 0) & (col < side)
-           & (z >= BELOW_TABLE) & (z <= top))
-  cell = jnp.where(valid, row * side + col, side * side).reshape(-1)
-  height = jnp.round(jnp.clip(z, 0.0, top) / HEIGHT_UNIT).astype(jnp.int32)
+  cell, height = binned(image.points[..., 0], image.points[..., 1], image.points[..., 2],
+                        image.hit, perception.heightmap_resolution, scene.workspace_half,
+                        scene.workspace_top, jnp)
+  valid = cell >= 0
+  cell = jnp.where(valid, cell, side * side).reshape(-1)
   key = jnp.where(valid, height * GEOM_SLOTS + image.geom, -1).reshape(-1)
   best = jnp.full(side * side + 1, -1, jnp.int32).at[cell].max(key)[:-1].reshape(side, side)
   seen = best >= 0
@@ -78,7 +74,7 @@ def observe(env, state, config: PerceptionConfig) -> Observation:
 
 def change_observed(before: Observation, after: Observation, grasp_success,
                     config: PerceptionConfig):
-  """Either view changed (`deploy.heightmaps.changed_views`, the deploy path's rule too), or the
+  """Either view changed (`sim.contract.changed_views`, the deploy path's rule too), or the
   grasp succeeded (docs/design.md)."""
   views = changed_views(before.depth, before.seen, after.depth, after.seen, config.change_min,
                         config.change_max, config.change_area, config.heightmap_resolution, jnp)

@@ -20,7 +20,7 @@ from mvcoba_jax.config import Config, Error
 from mvcoba_jax.deploy import checks, model_file
 from mvcoba_jax.deploy.calibration import DeployError
 from mvcoba_jax.deploy.policy import Action
-from mvcoba_jax.deploy.heightmaps import filled
+from mvcoba_jax.sim.contract import filled
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.sim.geometry import rotation_angle
 from mvcoba_jax.sim.contract import push_length

@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from mvcoba_jax.deploy.heightmaps import BELOW_TABLE  # heights lower are not the table's
+from mvcoba_jax.sim.contract import BELOW_TABLE  # heights lower are not the table's
 
 COLOR_SCALES = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}
 

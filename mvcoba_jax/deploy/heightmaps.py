@@ -1,17 +1,15 @@
 """Depth (and colour) images of calibrated cameras to the heightmaps a trained policy acts on,
 built as training builds them (`mvcoba_jax/perception.py`): each view's points in the workspace
-frame, binned into the workspace grid, the highest point of a cell kept (heights in 10 um steps,
-clipped to [0, top]; points below -5 mm or above `top` dropped), a cell no point reaches left at
-0 and unseen. Missing depth (0, NaN or infinite) gives no point."""
+frame, binned into the workspace grid as the contract bins them (`sim.contract.binned`), the
+highest point of a cell kept, a cell no point reaches left at 0 and unseen. Missing depth (0, NaN
+or infinite) gives no point."""
 from __future__ import annotations
 
 import cv2
 import numpy as np
 
 from mvcoba_jax.deploy.calibration import Calibration, Camera, DeployError
-
-HEIGHT_UNIT = 1e-5  # m: heights are kept in these steps (training's `perception` reads both)
-BELOW_TABLE = -0.005  # m: points lower than this are not the table's
+from mvcoba_jax.sim.contract import HEIGHT_UNIT, binned
 
 
 def read_depth(path, camera: Camera) -> np.ndarray:
@@ -88,13 +86,10 @@ def heightmaps(depths, calibration: Calibration, colors=None):
     if depth.ndim != 2:
       raise DeployError(f'{where}: depth image of shape {depth.shape}; (height, width) expected')
     xyz, pixel = points(depth, camera, calibration, where)
-    col = np.floor((xyz[:, 0] + half) / res).astype(np.int64)
-    row = np.floor((xyz[:, 1] + half) / res).astype(np.int64)
-    keep = ((row >= 0) & (row < r) & (col >= 0) & (col < r) & (xyz[:, 2] >= BELOW_TABLE)
-            & (xyz[:, 2] <= calibration.top))
-    height = np.round(np.clip(xyz[keep, 2], 0.0, calibration.top) / HEIGHT_UNIT).astype(np.int64)
-    cell = row[keep] * r + col[keep]
-    best = np.full(r * r, -1, np.int64)
+    cell, height = binned(xyz[:, 0], xyz[:, 1], xyz[:, 2], True, res, half, calibration.top)
+    keep = cell >= 0
+    cell, height = cell[keep], height[keep]
+    best = np.full(r * r, -1, np.int32)
     np.maximum.at(best, cell, height)
     seen = best >= 0
     out_seen[i] = seen.reshape(r, r)
@@ -114,34 +109,3 @@ def heightmaps(depths, calibration: Calibration, colors=None):
       flat = out_color[i].reshape(-1, 3)
       flat[cell[top]] = rgb[top]
   return out_color, out_depth, out_seen
-
-
-def filled(color, depth, seen, xp=np):
-  """(color, depth) of views (V, R, R[, 3]) whose unseen cells take the highest point any other
-  view saw there, with its colour (`perception.fill_unseen`); cells no view saw stay 0. `xp` is
-  numpy here and jax.numpy in training (`perception.observe`): one rule on both sides."""
-  best = xp.argmax(xp.where(seen, depth, -1.0), axis=0)[None]  # (1, R, R): the highest view
-  any_seen = xp.any(seen, axis=0)
-  fill_depth = xp.where(any_seen, xp.take_along_axis(depth, best, axis=0)[0], 0.0)
-  fill_color = xp.where(any_seen[..., None],
-                        xp.take_along_axis(color, best[..., None], axis=0)[0], 0.0)
-  return (xp.where(seen[..., None], color, fill_color[None]).astype(color.dtype),
-          xp.where(seen, depth, fill_depth[None]).astype(depth.dtype))
-
-
-def moved_cells(before_depth, before_seen, after_depth, after_seen, change_min: float,
-                change_max: float, xp=np):
-  """(..., V) how many cells of each view's heightmap (..., V, R, R) changed height by between
-  `change_min` and `change_max`, cells missing from either frame counting as unchanged (VPG's
-  rule). `xp` is numpy here and jax.numpy in training (`perception.change_observed`)."""
-  diff = xp.abs(after_depth - before_depth)
-  moved = (diff >= change_min) & (diff <= change_max) & before_seen & after_seen
-  return moved.sum(axis=(-2, -1))
-
-
-def changed_views(before_depth, before_seen, after_depth, after_seen, change_min: float,
-                  change_max: float, change_area: float, resolution: float, xp=np):
-  """(..., V) whether each view's heightmap (..., V, R, R) changed: more `moved_cells` than
-  `change_area` / resolution^2 (VPG's 300 cells at 2 mm)."""
-  return (moved_cells(before_depth, before_seen, after_depth, after_seen, change_min, change_max,
-                      xp) > change_area / resolution ** 2)

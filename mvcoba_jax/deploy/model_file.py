@@ -12,7 +12,7 @@ import math
 import pathlib
 
 from mvcoba_jax.deploy.calibration import DeployError
-from mvcoba_jax.deploy.heightmaps import BELOW_TABLE, HEIGHT_UNIT
+from mvcoba_jax.sim.contract import BELOW_TABLE, HEIGHT_UNIT
 from mvcoba_jax.sim.contract import GRASP, PUSH, RANGES
 
 FORMAT = 'mvcoba-jax-export/2'  # what export writes: the graph outputs the action

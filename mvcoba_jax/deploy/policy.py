@@ -11,7 +11,7 @@ import numpy as np
 
 from mvcoba_jax.deploy import checks, model_file
 from mvcoba_jax.deploy.calibration import Calibration, DeployError
-from mvcoba_jax.deploy.heightmaps import changed_views, filled
+from mvcoba_jax.sim.contract import changed_views, filled
 from mvcoba_jax.sim.contract import pixel_to_world, push_length
 
 

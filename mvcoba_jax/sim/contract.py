@@ -1,11 +1,15 @@
-"""The contract between the heightmaps, the simulator and the robot: where a heightmap cell is in
-the workspace and how far a push slides. One rule each for the simulator (`primitives.target`,
-over jax.numpy in the compiled step), `Policy.act`, the exported policy's runtime
-(`deploy.OnnxPolicy.act`, numpy only) and the examples, so a policy's figures describe the actions
-a robot takes. Imports neither JAX nor MuJoCo: the deploy package reads it without them."""
+"""The contract between the heightmaps, the simulator and the robot: how camera points are binned
+into heightmaps, how views fill each other and when they changed, where a heightmap cell is in the
+workspace and how far a push slides. One rule each for the simulator (over jax.numpy in the
+compiled step: `perception`, `primitives.target`), `Policy.act`, the exported policy's runtime
+(`deploy`, numpy only) and the examples, so a policy's figures describe what a robot sees and
+does. Imports neither JAX, MuJoCo nor OpenCV: the deploy package reads it without them."""
 from __future__ import annotations
 
 import numpy as np
+
+HEIGHT_UNIT = 1e-5  # m: heights are kept in these steps
+BELOW_TABLE = -0.005  # m: points lower than this are not the table's
 
 # The primitives' numbers: the order of the networks' maps and of the exported graph's action.
 PUSH, GRASP = 0, 1
@@ -39,6 +43,28 @@ def push_length(start, angle, length, half, xp=np):
   return xp.maximum(reach, 0.0)
 
 
+def world_to_pixel(x, y, resolution: float, workspace_half: float, xp=np):
+  """Heightmap (row, col) of the cell that holds the workspace point (x, y) (may be out of
+  range): the inverse of `pixel_to_world`."""
+  col = xp.floor((x + workspace_half) / resolution).astype(xp.int32)
+  row = xp.floor((y + workspace_half) / resolution).astype(xp.int32)
+  return row, col
+
+
+def binned(x, y, z, hit, resolution: float, workspace_half: float, top: float, xp=np):
+  """Each camera point's heightmap cell (row * side + col; -1 for a point outside the grid,
+  below BELOW_TABLE or above `top`, or not `hit`) and its height in HEIGHT_UNITs (clipped to
+  [0, top]): how the simulator's cameras and a robot's are binned alike, each heightmap cell then
+  keeping its highest point."""
+  side = round(2 * workspace_half / resolution)
+  row, col = world_to_pixel(x, y, resolution, workspace_half, xp)
+  keep = (hit & (row >= 0) & (row < side) & (col >= 0) & (col < side) & (z >= BELOW_TABLE)
+          & (z <= top))
+  cell = xp.where(keep, row * side + col, -1)
+  height = xp.round(xp.clip(z, 0.0, top) / HEIGHT_UNIT).astype(xp.int32)
+  return cell, height
+
+
 def pixel_to_world(row, col, resolution: float, workspace_half: float):
   """Centre (x, y) of heightmap cell (row, col): row grows with y, col with x, and cell (r, c)
   covers the square whose lower corner is (-half + c * res, -half + r * res). Over numbers,
@@ -46,3 +72,34 @@ def pixel_to_world(row, col, resolution: float, workspace_half: float):
   x = -workspace_half + (col + 0.5) * resolution
   y = -workspace_half + (row + 0.5) * resolution
   return x, y
+
+
+def filled(color, depth, seen, xp=np):
+  """(color, depth) of views (V, R, R[, 3]) whose unseen cells take the highest point any other
+  view saw there, with its colour (`perception.fill_unseen`); cells no view saw stay 0. `xp` is
+  numpy here and jax.numpy in training (`perception.observe`): one rule on both sides."""
+  best = xp.argmax(xp.where(seen, depth, -1.0), axis=0)[None]  # (1, R, R): the highest view
+  any_seen = xp.any(seen, axis=0)
+  fill_depth = xp.where(any_seen, xp.take_along_axis(depth, best, axis=0)[0], 0.0)
+  fill_color = xp.where(any_seen[..., None],
+                        xp.take_along_axis(color, best[..., None], axis=0)[0], 0.0)
+  return (xp.where(seen[..., None], color, fill_color[None]).astype(color.dtype),
+          xp.where(seen, depth, fill_depth[None]).astype(depth.dtype))
+
+
+def moved_cells(before_depth, before_seen, after_depth, after_seen, change_min: float,
+                change_max: float, xp=np):
+  """(..., V) how many cells of each view's heightmap (..., V, R, R) changed height by between
+  `change_min` and `change_max`, cells missing from either frame counting as unchanged (VPG's
+  rule). `xp` is numpy here and jax.numpy in training (`perception.change_observed`)."""
+  diff = xp.abs(after_depth - before_depth)
+  moved = (diff >= change_min) & (diff <= change_max) & before_seen & after_seen
+  return moved.sum(axis=(-2, -1))
+
+
+def changed_views(before_depth, before_seen, after_depth, after_seen, change_min: float,
+                  change_max: float, change_area: float, resolution: float, xp=np):
+  """(..., V) whether each view's heightmap (..., V, R, R) changed: more `moved_cells` than
+  `change_area` / resolution^2 (VPG's 300 cells at 2 mm)."""
+  return (moved_cells(before_depth, before_seen, after_depth, after_seen, change_min, change_max,
+                      xp) > change_area / resolution ** 2)

@@ -59,13 +59,6 @@ def matrix_to_quat(m: np.ndarray) -> np.ndarray:
   return q
 
 
-def world_to_pixel(x, y, resolution: float, workspace_half: float):
-  """Heightmap (row, col) of the cell that contains world point (x, y) (may be out of range)."""
-  col = jnp.floor((x + workspace_half) / resolution).astype(jnp.int32)
-  row = jnp.floor((y + workspace_half) / resolution).astype(jnp.int32)
-  return row, col
-
-
 def rotate_images(images, angle):
   """`images` (N, H, W, C) rotated by `angle` (scalar or (N,) rad) about the image centre.
 

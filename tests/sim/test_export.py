@@ -271,7 +271,7 @@ def test_a_policy_that_fills_unseen_cells_acts_alike_in_jax_and_deploy(tmp_path)
   fill, ONNX scores, its rule) takes the JAX policy's action, after a change and after none;
   without `seen` the JAX policy refuses."""
   from mvcoba_jax.deploy import OnnxPolicy, calibration_from_dict
-  from mvcoba_jax.deploy.heightmaps import filled
+  from mvcoba_jax.sim.contract import filled
   from mvcoba_jax.sim import cameras
   (tmp_path / 'run').mkdir()
   trainer, workdir, _ = _workdir(resolve(TINY, ['network.suppress=true',

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mvcoba_jax import perception
-from mvcoba_jax.deploy.heightmaps import changed_views
+from mvcoba_jax.sim.contract import changed_views
 from mvcoba_jax.learner import networks
 from mvcoba_jax.sim import shapes
 from mvcoba_jax.sim.contract import pixel_to_world

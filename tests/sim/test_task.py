@@ -10,7 +10,7 @@ from mvcoba_jax.config import resolve
 from mvcoba_jax.learner import agent
 from mvcoba_jax.learner.agent import PixelAction
 from mvcoba_jax.learner.task import State
-from mvcoba_jax.sim.geometry import world_to_pixel
+from mvcoba_jax.sim.contract import world_to_pixel
 from mvcoba_jax.sim.primitives import GRASP, PUSH
 from tests.helpers import layout, make_task, stack
 

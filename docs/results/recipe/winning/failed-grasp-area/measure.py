@@ -15,7 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from mvcoba_jax import api
-from mvcoba_jax.deploy.heightmaps import moved_cells
+from mvcoba_jax.sim.contract import moved_cells
 from mvcoba_jax.learner import agent
 from mvcoba_jax.learner import task as task_lib
 
