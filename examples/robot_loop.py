@@ -19,6 +19,7 @@ import sys
 import numpy as np
 
 from mvcoba_jax.deploy import Action, DeployError, OnnxPolicy, calibration_from_dict, heightmaps
+from mvcoba_jax.sim.contract import failures_after
 
 
 class Rig:
@@ -79,7 +80,7 @@ def run(rig: Rig, policy: OnnxPolicy, calibration, actions: int, say=print) -> l
   depths, colors = rig.capture()
   frame = heightmaps(depths, calibration, colors)
   changed, records = True, []  # before the first action the scene counts as changed
-  failed_grasps = 0  # grasps in a row that held nothing
+  failures = 0  # failed actions in a row: a grasp that held nothing, a push that changed nothing
   for i in range(actions):
     try:
       action = policy.act(*frame, changed, calibration)
@@ -90,8 +91,8 @@ def run(rig: Rig, policy: OnnxPolicy, calibration, actions: int, say=print) -> l
     grasped = rig.execute(action)
     depths, colors = rig.capture()
     after = heightmaps(depths, calibration, colors)
-    changed = policy.changed(frame[1:], after[1:], grasped, failed_grasps)
-    failed_grasps = failed_grasps + 1 if grasped is False else 0
+    changed = policy.changed(frame[1:], after[1:], grasped, failures)
+    failures = int(failures_after(failures, grasped is not None, bool(grasped), changed))
     frame = after
     records.append({'round': i, 'primitive': action.primitive,
                     'position': [round(v, 4) for v in action.position],

@@ -72,10 +72,9 @@ def observe(env, state, config: PerceptionConfig) -> Observation:
   return Observation(color=color, depth=depth, seen=seen)
 
 
-def change_observed(before: Observation, after: Observation, grasp_success,
-                    config: PerceptionConfig):
-  """Either view changed (`sim.contract.changed_views`, the deploy path's rule too), or the
-  grasp succeeded (docs/design.md)."""
+def frames_changed(before: Observation, after: Observation, config: PerceptionConfig):
+  """Whether some view changed between two observations (`sim.contract.changed_views`, the
+  deploy path's rule too); `sim.contract.observed_change` adds what a grasp held."""
   views = changed_views(before.depth, before.seen, after.depth, after.seen, config.change_min,
                         config.change_max, config.change_area, config.heightmap_resolution, jnp)
-  return jnp.any(views, axis=-1) | grasp_success
+  return jnp.any(views, axis=-1)

@@ -11,7 +11,7 @@ import numpy as np
 
 from mvcoba_jax.deploy import checks, model_file
 from mvcoba_jax.deploy.calibration import Calibration, DeployError
-from mvcoba_jax.sim.contract import changed_views, filled
+from mvcoba_jax.sim.contract import changed_views, filled, observed_change
 from mvcoba_jax.sim.contract import pixel_to_world, push_length
 
 
@@ -199,33 +199,31 @@ class OnnxPolicy:
                   opening=float(self.gripper['max_opening']) if grasp else 0.0,
                   rotation=rotation, row=row, col=col, q=score)
 
-  def changed(self, before, after, grasped: bool | None = None, failed_grasps: int = 0) -> bool:
-    """Whether the last action changed the scene, as training observes it
-    (`perception.change_observed`): a grasp that held something (`grasped` True), or between
-    two frames' (depth, seen) heightmaps more cells than `change_area` / resolution^2 in some
-    view changed height by between `change_min` and `change_max` (model.json's config; VPG's
-    300 cells at 2 mm, 1 to 30 cm), cells missing from either frame counting as unchanged. A
-    policy trained with `perception.failed_grasp_changes` off counts a grasp that held nothing
-    (`grasped` False) as no change whatever it moved, once `failed_grasps` (the grasps in a row
-    before it that held nothing) reach its `failed_grasp_retries`. `grasped`: None after a push,
-    or where the robot cannot tell."""
+  def changed(self, before, after, grasped: bool | None = None, failures: int = 0) -> bool:
+    """Whether the last action changed the scene, as the next action is chosen in training and
+    evaluation (`sim.contract.observed_change`): between two frames' (depth, seen) heightmaps
+    more cells than `change_area` / resolution^2 in some view changed height by between
+    `change_min` and `change_max` (model.json's config; VPG's 300 cells at 2 mm, 1 to 30 cm),
+    cells missing from either frame counting as unchanged, or a grasp held something (`grasped`
+    True). A policy trained with `perception.failed_grasp_changes` off counts a grasp that held
+    nothing (`grasped` False) as no change once `failures`, the failed actions in a row before it
+    (`sim.contract.failures_after` counts them), reach its `failed_grasp_retries`. `grasped`:
+    None after a push, or where the robot cannot tell (the frames decide)."""
     spec = self.spec
     if grasped is not None:
       grasped = _flag('grasped', grasped, 'did the grasp hold something; None after a push or '
                       'where the robot cannot tell')
-    if isinstance(failed_grasps, (bool, np.bool_)) or not isinstance(
-        failed_grasps, (int, np.integer)) or failed_grasps < 0:
-      raise DeployError(f'failed_grasps={failed_grasps!r:.40}: a whole number of 0 or more (the '
-                        'grasps in a row before this one that held nothing)')
-    if grasped:
-      return True
-    if (grasped is False and not spec.failed_grasp_changes
-        and failed_grasps >= spec.failed_grasp_retries):
-      return False
+    if isinstance(failures, (bool, np.bool_)) or not isinstance(
+        failures, (int, np.integer)) or failures < 0:
+      raise DeployError(f'failures={failures!r:.40}: a whole number of 0 or more (the failed '
+                        'actions in a row before this one)')
     (d0, s0), (d1, s1) = (tuple(np.asarray(a) for a in frame) for frame in (before, after))
     if (not d0.shape == s0.shape == d1.shape == s1.shape or s0.dtype != np.bool_
         or s1.dtype != np.bool_):
       raise DeployError(f'changed: frames of depth {d0.shape} / {d1.shape} and seen {s0.shape} / '
                         f'{s1.shape}: two frames of one shape, seen as booleans')
-    return bool(changed_views(d0, s0, d1, s1, spec.change_min, spec.change_max,
-                              spec.change_area, spec.resolution_m).any())
+    frames = changed_views(d0, s0, d1, s1, spec.change_min, spec.change_max, spec.change_area,
+                           spec.resolution_m).any()
+    _, rule = observed_change(frames, grasped is not None, bool(grasped), failures,
+                              spec.failed_grasp_changes, spec.failed_grasp_retries)
+    return bool(rule)

@@ -26,7 +26,7 @@ from mvcoba_jax.evaluation.metrics import RunLog
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.learner import replay as replay_lib
 from mvcoba_jax.learner.task import Outcome, State, Task
-from mvcoba_jax.sim.contract import pixel_to_world
+from mvcoba_jax.sim import contract
 from mvcoba_jax.sim.tabletop import Layout, where_envs
 from mvcoba_jax.suites.cases import start
 
@@ -341,7 +341,8 @@ def _repeats(runs: Runs, action: agent.PixelAction, out: Outcome, active):
   slots = jnp.arange(runs.failed.shape[1])
   repeated = jnp.any((slots < runs.tried[:, None])
                      & jnp.all(runs.failed == this[:, None], axis=-1), axis=-1)
-  failed_here = agent.failed(action.primitive, out.info.grasp_success, out.changed)
+  failed_here = contract.failed(action.primitive == agent.GRASP, out.info.grasp_success,
+                                out.changed, jnp)
   kept = failed_here & ~out.changed & active
   at = jnp.minimum(runs.tried, slots.size - 1)
   failed = jnp.where(kept[:, None, None],
@@ -411,7 +412,7 @@ def losses(trace: Trace, names: list[str], task: Task) -> list[dict]:
   left = np.asarray(trace.left_workspace) & np.asarray(trace.active)[..., None]
   records = []
   for run, t, slot in zip(*np.nonzero(left)):
-    x, y = pixel_to_world(trace.row[run, t], trace.col[run, t],
+    x, y = contract.pixel_to_world(trace.row[run, t], trace.col[run, t],
                           task.perception.heightmap_resolution, half)
     xyz = np.asarray(trace.object_xyz[run, t, slot], float)
     records.append({

@@ -163,11 +163,6 @@ def reward(primitive, grasp_success, changed, lost, paid: Reward):
   return jnp.where(primitive == GRASP, grasp_reward, push_reward) + paid.lost_object * lost
 
 
-def failed(primitive, grasp_success, changed):
-  """An action that achieved nothing: a grasp that held nothing, a push that changed nothing."""
-  return jnp.where(primitive == GRASP, ~grasp_success, ~changed)
-
-
 def future_value(q_next, changed, method: Method, train: TrainConfig):
   """max Q(s', a') over the primitive the rule picks at s' (over both for a rule whose target
   says so, `Rule.future_over_both`, and with `train.future_max='both'`), (B,)."""

@@ -19,6 +19,7 @@ from mvcoba_jax import perception
 from mvcoba_jax.config import Config, PerceptionConfig
 from mvcoba_jax.learner import agent
 from mvcoba_jax.learner.replay import Transition
+from mvcoba_jax.sim import contract
 from mvcoba_jax.sim.tabletop import EnvState, StepInfo, Tabletop, where_envs
 
 
@@ -120,19 +121,16 @@ class Task:
     obs = state.obs
     next_obs = self.observe(states, per_env)
     healthy = info.healthy
-    changed = perception.change_observed(obs, next_obs, info.grasp_success,
-                                         self.perception) & healthy
-    rule_changed = changed
-    if not self.perception.failed_grasp_changes:
-      held = (action.primitive != agent.GRASP) | info.grasp_success
-      rule_changed = changed & (held | (state.failures < self.perception.failed_grasp_retries))
-      changed &= held
+    is_grasp, held = action.primitive == agent.GRASP, info.grasp_success
+    changed, rule_changed = contract.observed_change(
+        perception.frames_changed(obs, next_obs, self.perception) & healthy, is_grasp,
+        held & healthy, state.failures, self.perception.failed_grasp_changes,
+        self.perception.failed_grasp_retries, jnp)
     reward = jnp.where(healthy,
                        agent.reward(action.primitive, info.grasp_success, changed, info.lost,
                                     self.reward),
                        0.0)
-    failures = jnp.where(agent.failed(action.primitive, info.grasp_success, changed),
-                         state.failures + 1, 0)
+    failures = contract.failures_after(state.failures, is_grasp, held, changed, jnp)
     cleared = ~jnp.any(states.in_play, axis=1)
     done = cleared | (failures > self.env.config.env.max_failures) | ~healthy
     return (State(env=states, obs=next_obs, changed=rule_changed, failures=failures),

@@ -103,3 +103,33 @@ def changed_views(before_depth, before_seen, after_depth, after_seen, change_min
   `change_area` / resolution^2 (VPG's 300 cells at 2 mm)."""
   return (moved_cells(before_depth, before_seen, after_depth, after_seen, change_min, change_max,
                       xp) > change_area / resolution ** 2)
+
+
+def observed_change(frames_changed, is_grasp, held, failures, failed_grasp_changes: bool,
+                    retries, xp=np):
+  """(changed, rule_changed) after an action, for the simulator (over jax.numpy) and a robot
+  alike. `changed`, which the reward and the failure count read: the frames changed (some view's
+  `changed_views`) or a grasp held something (`held`); a policy trained with
+  `failed_grasp_changes` off counts a grasp that held nothing as no change whatever it moved.
+  `rule_changed`, the `changed` its next action is chosen with: the same, except that after a
+  grasp that held nothing the frames still decide while fewer than `retries` failed actions came
+  in a row before it (`failures`, as `failures_after` counts them)."""
+  frames_changed, is_grasp, held = (xp.asarray(v, bool) for v in (frames_changed, is_grasp, held))
+  changed = frames_changed | (is_grasp & held)
+  if failed_grasp_changes:
+    return changed, changed
+  kept = ~is_grasp | held
+  return changed & kept, changed & (kept | (failures < retries))
+
+
+def failed(is_grasp, held, changed, xp=np):
+  """An action that achieved nothing: a grasp that held nothing, a push that changed nothing
+  (`changed` as `observed_change` gives it)."""
+  return xp.where(xp.asarray(is_grasp, bool), ~xp.asarray(held, bool), ~xp.asarray(changed, bool))
+
+
+def failures_after(failures, is_grasp, held, changed, xp=np):
+  """The failed actions in a row once this one is done: a `failed` one adds one, anything else
+  starts again at 0. The count that ends a run (`env.max_failures`) and that `observed_change`
+  reads."""
+  return xp.where(failed(is_grasp, held, changed, xp), failures + 1, 0)

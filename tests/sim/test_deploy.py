@@ -191,13 +191,13 @@ def test_the_deploy_api_takes_a_plain_yes_or_no_as_the_jax_policy_does(scenes, o
   frame = (depth, seen)
   assert onnx.changed(frame, frame, grasped=np.True_) is True
   retries = onnx.spec.failed_grasp_retries
-  assert onnx.changed(frame, frame, grasped=np.False_, failed_grasps=np.int64(retries)) is False
+  assert onnx.changed(frame, frame, grasped=np.False_, failures=np.int64(retries)) is False
   for bad in ('no', 0, np.asarray(False)):
     with pytest.raises(DeployError, match=r'^grasped=.*: True or False'):
       onnx.changed(frame, frame, grasped=bad)
   for bad in (-1, 1.5, '1', None, True):
-    with pytest.raises(DeployError, match=r'^failed_grasps=.*: a whole number'):
-      onnx.changed(frame, frame, grasped=False, failed_grasps=bad)
+    with pytest.raises(DeployError, match=r'^failures=.*: a whole number'):
+      onnx.changed(frame, frame, grasped=False, failures=bad)
 
 
 def test_the_policy_carries_its_gripper_and_refuses_another(onnx, capsys):
@@ -376,7 +376,7 @@ def test_a_failed_grasp_is_no_change_for_a_policy_trained_so(scenes, onnx):
   assert retrying.spec == dataclasses.replace(onnx.spec, failed_grasp_retries=1)
   assert retrying.changed(before, after, grasped=False)  # the first: the frames decide
   assert not retrying.changed(before, before, grasped=False)
-  assert not retrying.changed(before, after, grasped=False, failed_grasps=1)
+  assert not retrying.changed(before, after, grasped=False, failures=1)
   with pytest.raises(DeployError, match='two frames of one shape'):
     onnx.changed(before, (after[0][:, :50], after[1][:, :50]))
   with pytest.raises(DeployError, match='seen as booleans'):

@@ -141,11 +141,9 @@ def test_change_observation(task, env, observe):
           layout(env, [(FLAT, -0.1, 0.1, 0.0)])]  # cube grasped away
   obs = observe(lays)
   frame = lambda i: jax.tree.map(lambda x: x[i], obs)
-  no = np.bool_(False)
-  assert bool(perception.change_observed(frame(0), frame(1), no, cfg))
-  assert not bool(perception.change_observed(frame(0), frame(0), no, cfg))
-  assert bool(perception.change_observed(frame(0), frame(2), no, cfg))
-  assert bool(perception.change_observed(frame(0), frame(0), np.bool_(True), cfg))
+  assert bool(perception.frames_changed(frame(0), frame(1), cfg))
+  assert not bool(perception.frames_changed(frame(0), frame(0), cfg))
+  assert bool(perception.frames_changed(frame(0), frame(2), cfg))
   # Missing cells never count: the same scene with one view blanked out changes nothing.
   blind = frame(1).replace(seen=frame(1).seen.at[0].set(False), depth=frame(1).depth.at[0].set(0))
   views = changed_views(frame(0).depth, frame(0).seen, blind.depth, blind.seen, cfg.change_min,

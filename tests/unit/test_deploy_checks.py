@@ -89,6 +89,36 @@ def test_the_simulator_cuts_a_push_by_the_same_rule():
   assert (simulated < 0.1 - 1e-3).sum() >= 10  # some of them cut
 
 
+def test_one_change_rule_and_one_failure_count_for_simulator_and_robot():
+  """`observed_change` and `failures_after` give the simulator's values (jitted over JAX arrays,
+  as `Task` calls them) and the robot's (numpy, Python's bools) alike, for every input; and the
+  count is of failed actions in a row, pushes that changed nothing included: after a failed
+  grasp and such a push, a policy allowed one retry no longer lets the frames decide."""
+  import itertools  # noqa: PLC0415
+
+  import jax  # noqa: PLC0415
+  import jax.numpy as jnp  # noqa: PLC0415
+
+  from mvcoba_jax.sim.contract import failures_after, observed_change  # noqa: PLC0415
+  rows = np.array(list(itertools.product([0, 1], [0, 1], [0, 1], range(4))))
+  for keeps, retries in itertools.product([True, False], range(3)):
+    def both(frames, grasp, held, failures, xp):
+      changed, rule = observed_change(frames, grasp, held, failures, keeps, retries, xp)
+      return changed, rule, failures_after(failures, grasp, held, changed, xp)
+    simulated = jax.jit(lambda r: both(r[:, 0] > 0, r[:, 1] > 0, r[:, 2] > 0, r[:, 3], jnp))(
+        jnp.asarray(rows))
+    robot = [both(bool(f), bool(g), bool(h), int(n), np) for f, g, h, n in rows]
+    for i, values in enumerate(zip(*robot)):
+      np.testing.assert_array_equal(np.asarray(simulated[i]), np.asarray(values, int))
+  failures, seen = 0, []
+  for frames, grasp, held in ((True, True, False), (False, False, False), (True, True, False)):
+    _, rule = observed_change(frames, grasp, held, failures, False, 1)
+    changed, _ = observed_change(frames, grasp, held, failures, False, 1)
+    failures = failures_after(failures, grasp, held, changed)
+    seen.append((bool(rule), int(failures)))
+  assert seen == [(True, 1), (False, 2), (False, 3)]
+
+
 SHIPPED = __import__('pathlib').Path(__file__).resolve().parents[2] / 'pretrained'
 ODD = [None, 'x', -1, 2 ** 70, 1e300, True, [], {}, [[1]], 0.5]
 FIELDS = ('format', 'primitives.push', 'primitives.grasp',

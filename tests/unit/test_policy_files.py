@@ -325,7 +325,7 @@ def test_the_deploy_policys_other_arguments_are_typed(tmp_path):
 
 def test_fuzzed_deploy_arguments_are_refused_in_one_line_or_accepted(tmp_path):
   """The deploy API's yes-or-no and count arguments (fixed seed): `changed`, `grasped` and
-  `failed_grasps` of odd types and values are each refused in one DeployError line, or taken
+  `failures` of odd types and values are each refused in one DeployError line, or taken
   when they are what the API documents (a bool, numpy's included; a count of 0 or more)."""
   import random
 
@@ -343,7 +343,7 @@ def test_fuzzed_deploy_arguments_are_refused_in_one_line_or_accepted(tmp_path):
     grasped, failed = rng.choice(odd), rng.choice(odd)
     count = isinstance(failed, (int, np.integer)) and not valid(failed) and failed >= 0
     try:
-      onnx.changed(frame, frame, grasped=grasped, failed_grasps=failed)
+      onnx.changed(frame, frame, grasped=grasped, failures=failed)
       assert (grasped is None or valid(grasped)) and count, (grasped, failed)
     except DeployError as e:
       assert '\n' not in str(e) and not ((grasped is None or valid(grasped)) and count), (
