@@ -167,7 +167,7 @@ class Online(Actor):
 
     def step(params, opt_state, transition, y):
       loss = lambda p, one, y: agent.executed_loss(self.q_maps, p, one, y, jnp.ones(1, bool),
-                                                   self.config)
+                                                   t, self.config.env.num_rotations)
       params, opt_state, _, _, sound = agent.sgd_step(
           loss, self.optimizer, params, opt_state, jax.tree.map(lambda x: x[None], transition),
           y[None])

@@ -223,7 +223,7 @@ def quarter_turned(batch, turns, num_rotations: int):
       row=pick([row, col, last - row, last - col]), col=pick([col, last - row, last - col, row]))
 
 
-def executed_loss(q_maps, params, batch, y, valid, config: Config):
+def executed_loss(q_maps, params, batch, y, valid, train: TrainConfig, num_rotations: int):
   """Huber loss of Q at each transition's executed pixel against its target `y` (N,), summed
   over the `valid` ones; also the TD errors (N,). `q_maps(params, obs, rotations (N, K))`.
 
@@ -233,14 +233,14 @@ def executed_loss(q_maps, params, batch, y, valid, config: Config):
   With `train.grasp_symmetry` a grasp's target also labels its rotation turned half way, in
   the same forward (two rotations per transition).
   """
-  t = config.train
+  t = train
   y = jax.lax.stop_gradient(y)
   weight = valid.astype(jnp.float32)
   if not t.grasp_symmetry:
     q = q_maps(params, batch.obs, batch.rotation[:, None])
     pred = networks.executed_q(q, batch.primitive, batch.row, batch.col)
     return jnp.sum(networks.huber_loss(pred, y, t.huber_delta) * weight), pred - y
-  k = config.env.num_rotations
+  k = num_rotations
   turned = (batch.rotation + k // 2) % k
   q = q_maps(params, batch.obs, jnp.stack([batch.rotation, turned], axis=1))
   pred, pred_turned = (networks.executed_q(q[:, :, i:i + 1], batch.primitive, batch.row,

@@ -129,7 +129,8 @@ class Trainer:
     else:
       q_next = self.q_maps(target_params, batch.next_obs)
       y = agent.target_value(q_next, batch.changed, batch.done, batch.reward, self.method, t)
-    return agent.executed_loss(self.q_maps, params, batch, y, valid, self.config)
+    return agent.executed_loss(self.q_maps, params, batch, y, valid, self.config.train,
+                               self.config.env.num_rotations)
 
   def update(self, state: TrainState, key, enabled=True,
              fresh: tuple[replay_lib.Transition, jnp.ndarray] | None = None

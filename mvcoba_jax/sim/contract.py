@@ -91,7 +91,7 @@ def moved_cells(before_depth, before_seen, after_depth, after_seen, change_min: 
                 change_max: float, xp=np):
   """(..., V) how many cells of each view's heightmap (..., V, R, R) changed height by between
   `change_min` and `change_max`, cells missing from either frame counting as unchanged (VPG's
-  rule). `xp` is numpy here and jax.numpy in training (`perception.change_observed`)."""
+  rule). Over numpy (a robot) or jax.numpy (`perception.frames_changed`)."""
   diff = xp.abs(after_depth - before_depth)
   moved = (diff >= change_min) & (diff <= change_max) & before_seen & after_seen
   return moved.sum(axis=(-2, -1))

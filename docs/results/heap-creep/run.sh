@@ -4,7 +4,7 @@
 # 2-seed screen of training with it against issue 80's `cut_default` at seeds 20-21, validation
 # suites only; resumable.
 set -euo pipefail
-cd /work/tree-noslip  # a worktree at the commit that added scene.noslip_iterations
+cd /work/tree-noslip  # a worktree at 1caf328, the commit that added scene.noslip_iterations
 export PYTHONPATH=$PWD PATH=/work/main/.venv/bin:$PATH MVCOBA_JAX_CACHE=/work/main/.cache/jax
 W=/work/noslip
 python benchmarks/heap_creep.py --noslip 0 3 10 --seconds 20 > $W/creep.json
