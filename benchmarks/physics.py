@@ -36,12 +36,13 @@ from mvcoba_jax.sim.primitives import Action  # noqa: E402
 from mvcoba_jax.sim.tabletop import Tabletop  # noqa: E402
 
 POOLS = {  # object slots per scene size; every slot is in play
+    2: (('cube', 1), ('tall_box', 1)),  # device.sh --tiny: every step, compiled in the least time
     10: (('cube', 2), ('tall_box', 1), ('flat_box', 1), ('prism', 1), ('arch', 1),
          ('cylinder', 2), ('disk', 1), ('octagon', 1)),
     30: (('cube', 5), ('tall_box', 4), ('flat_box', 4), ('prism', 4), ('arch', 4),
          ('cylinder', 3), ('disk', 3), ('octagon', 3)),
 }
-CONTACT_LIMITS = {10: (24, 96), 30: (48, 192)}  # MJX's max_geom_pairs, max_contact_points
+CONTACT_LIMITS = {2: (8, 32), 10: (24, 96), 30: (48, 192)}  # MJX's max_geom_pairs, max_contact_points
 
 
 def make_env(n: int, backend: str) -> Tabletop:
