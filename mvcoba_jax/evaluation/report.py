@@ -211,9 +211,9 @@ def shape_table(by_label: dict[str, dict]) -> str:
   def entry(m):
     if m is None:
       return ''
-    picked = '' if math.isnan(m['objects_picked']) else f'{m["objects_picked"]:.1f}'
-    lifted = '-' if math.isnan(m['grasp_success']) else f'{m["grasp_success"]:.1f}'
-    return f'{lifted} ({m["grasps"]}) / {picked or "-"} / {m["pushes"]}'
+    rate = lambda v: '-' if math.isnan(v) else f'{v:.1f}'
+    return (f'{rate(m["grasp_success"])} ({m["grasps"]}) / {rate(m["objects_picked"])} / '
+            f'{m["pushes"]}')
   return '\n'.join([head] + [f'| {cell(label)} | ' + ' | '.join(entry(row.get(s)) for s in shapes)
                              + ' |' for label, row in by_label.items()])
 

@@ -22,7 +22,6 @@ from flax import nnx, struct
 from mvcoba_jax import perception
 from mvcoba_jax.config import Config
 from mvcoba_jax.evaluation import metrics
-from mvcoba_jax.evaluation.metrics import RunLog
 from mvcoba_jax.learner import agent, networks
 from mvcoba_jax.learner import replay as replay_lib
 from mvcoba_jax.learner.task import Outcome, State, Task
@@ -286,12 +285,13 @@ def lockstep(task: Task, actor: Actor, batch: Batch, record: bool, progress,
       jax.vmap(functools.partial(_by_slot, task.env))(before.env, after.env,
                                                       task.to_world(action, obs.depth), info),
       0)
-  runs = runs.replace(by_slot=by_slot, 
+  runs = runs.replace(
       actions=count(runs.actions, 1), grasp_attempts=count(runs.grasp_attempts, is_grasp),
       grasp_successes=count(runs.grasp_successes, info.grasp_success), picked=picked,
       lost=count(runs.lost, info.lost), finished=runs.finished | out.done,
       completed=runs.completed | (active & out.cleared & (picked == runs.objects)),
-      failed=failed, tried=tried, repeated_failures=count(runs.repeated_failures, repeated))
+      failed=failed, tried=tried, repeated_failures=count(runs.repeated_failures, repeated),
+      by_slot=by_slot)
   if record:
     runs = runs.replace(trace=jax.tree.map(
         lambda buf, x: buf.at[:, batch.t].set(x), runs.trace,
@@ -388,16 +388,15 @@ def evaluate(task: Task, actor: Actor, layouts: Layout, keys, max_actions: int,
     batch = jax.tree.map(lambda x: x[keep] if jnp.ndim(x) else x, batch)
 
 
-def run_logs(runs: Runs, task: Task) -> list[RunLog]:
+def run_logs(runs: Runs, task: Task) -> list[metrics.RunLog]:
   """Host-side per-run records for the metrics, of runs of `task`."""
   slot_shapes = task.env.scene.index.slot_shapes
   r = jax.tree.map(lambda x: x.tolist(), runs.replace(trace=None, carry=None))
-  return [RunLog(actions=r.actions[i], grasp_attempts=r.grasp_attempts[i],
-                 grasp_successes=r.grasp_successes[i], objects=r.objects[i], picked=r.picked[i],
-                 lost=r.lost[i], completed=r.completed[i],
-                 repeated_failures=r.repeated_failures[i],
-                 shapes=metrics.shape_counts(r.by_slot[i], slot_shapes))
-          for i in range(len(r.actions))]
+  return [metrics.RunLog(
+      actions=r.actions[i], grasp_attempts=r.grasp_attempts[i],
+      grasp_successes=r.grasp_successes[i], objects=r.objects[i], picked=r.picked[i],
+      lost=r.lost[i], completed=r.completed[i], repeated_failures=r.repeated_failures[i],
+      shapes=metrics.shape_counts(r.by_slot[i], slot_shapes)) for i in range(len(r.actions))]
 
 
 def losses(trace: Trace, names: list[str], task: Task) -> list[dict]:
