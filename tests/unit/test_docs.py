@@ -3,6 +3,7 @@ name resolve: a file moved or a function renamed takes its mentions along. The r
 state are recomputed from the results.json they rest on."""
 import dataclasses
 import importlib
+import json
 import pathlib
 import re
 
@@ -228,3 +229,73 @@ def test_a_changed_claim_of_the_default_preset_fails(stated, mutated):
   assert stated in text
   with pytest.raises(AssertionError):
     _check_default_claim(text.replace(stated, mutated))
+
+
+def _table_rows(page: str, header: str) -> list[list[str]]:
+  """The cells of the rows of the Markdown table of `page` whose header line starts with
+  `header`; the header and its rule left out."""
+  lines = (ROOT / page).read_text().splitlines()
+  start = next(i for i, line in enumerate(lines) if line.startswith(header))
+  rows = []
+  for line in lines[start:]:
+    if not line.startswith('|'):
+      break
+    rows.append([c.strip() for c in line.strip('|').split('|')])
+  return rows[2:]
+
+
+def _row_of(folder: str, suite: str, label: str = 'mvcoba') -> dict:
+  from mvcoba_jax.evaluation import report
+  return report.joined_report([str(ROOT / folder)])[suite][label]
+
+
+def _lost(row) -> str:
+  runs = [r for logs in row['runs'].values() for r in logs]
+  return f'{sum(r["lost"] for r in runs)} ({sum(r["lost"] > 0 for r in runs)})'
+
+
+def test_the_heap_creep_page_states_its_results():
+  """Every cell of heap-creep.md's three tables is its benchmark's JSON or its evaluations'
+  results, recomputed."""
+  bench = json.loads((ROOT / 'docs/results/benchmark-heap-creep.json').read_text())['results']
+  suites = iter(bench)
+  suite = None
+  for cells in _table_rows('docs/results/heap-creep.md', '| suite (objects in play)'):
+    suite = next(suites) if cells[0] else suite
+    row = bench[suite][cells[1]]
+    t = row['total']
+    assert cells[2:] == [str(t['slid_1cm']), str(t['slid_5cm']), str(t['left']),
+                         f'{row["physics_time_ratio"]:.2f}'], cells
+  frozen = {'without': 'docs/results/pretrained-mvcoba/frozen',
+            'noslip 3': 'docs/results/heap-creep/frozen-noslip3'}
+  for cells in _table_rows('docs/results/heap-creep.md', '| suite (runs)'):
+    suite, protocol = cells[0].split(' ')[0], cells[0].split(', ')[1]
+    row = _row_of(frozen[protocol], suite)
+    m = row['mean']
+    assert cells[1:] == [f'{m["grasp_success"]:.1f}', f'{m["completion"]:.1f}',
+                         f'{m["objects_picked"]:.1f}', _lost(row)], cells
+  evals = {'cut_default': 'docs/results/generalise/eval',
+           'noslip': 'docs/results/heap-creep/screen/eval'}
+  for cells in _table_rows('docs/results/heap-creep.md', '| variant, seed'):
+    variant, seed = cells[0].strip('`').split('`, ')
+    folder = f'{evals[variant]}/{variant}-s{seed}'
+    packed, heaps, high = (_row_of(folder, f'docs/results/validation/{s}')
+                           for s in ('val-packed', 'val-heaps', 'val-occluded-high'))
+    assert cells[1:] == [
+        f'{packed["mean"]["grasp_success"]:.1f} / {packed["mean"]["completion"]:.1f}',
+        f'{heaps["mean"]["grasp_success"]:.1f} / {heaps["mean"]["completion"]:.1f} / '
+        f'{_lost(heaps)}', f'{high["mean"]["grasp_success"]:.1f}'], cells
+
+
+def test_the_per_shape_table_of_the_gripper_page_is_its_results():
+  rows = {'RG2': 'mvcoba (cut_default/mvcoba-s20)',
+          '2F-85': 'mvcoba (gripper_robotiq_2f85/mvcoba-s20)'}
+  checked = 0
+  for cells in _table_rows('docs/results/gripper.md', '| suite, shape'):
+    suite, shape = cells[0].split(', ')
+    shape = shape.split(' (')[0].replace(' ', '_')
+    for label, cell in zip(rows.values(), cells[1:]):
+      m = _row_of('docs/results/gripper/shapes', suite, label)['by_shape'][shape]
+      assert cell == f'{m["grasp_success"]:.1f} ({m["grasps"]}), {m["pushes"]} pushes', cells
+      checked += 1
+  assert checked == 14
