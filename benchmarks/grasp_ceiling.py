@@ -5,9 +5,11 @@ Each shape of the default pool rests alone on the table at a yaw that is not a m
 all in one batch of `jax.vmap(env.step)`. Prints JSON: per shape, which rotations lifted it, the
 fraction of rotations that did, and whether any did. A shape that no rotation lifts caps what
 any policy can reach; one that few rotations lift is hard to learn. `--gripper` measures it for
-each named gripper preset (`sim/grippers.py`) in turn.
+each named gripper preset (`sim/grippers.py`) in turn; `--set` changes the default preset (another
+`scene.pool`: other shapes, mesh objects).
 
   python benchmarks/grasp_ceiling.py [--yaw-deg 10] [--gripper rg2 robotiq_2f85 franka_hand]
+                                     [--set scene.pool=package:sim/objects/everyday/mug:1,...]
 """
 from __future__ import annotations
 
@@ -41,10 +43,12 @@ def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument('--yaw-deg', type=float, default=10.0, help='yaw of every shape')
   parser.add_argument('--gripper', nargs='+', default=['rg2'], help='gripper presets')
+  parser.add_argument('--set', nargs='*', default=[], metavar='KEY=VALUE',
+                      help='overrides of the default preset')
   args = parser.parse_args()
   runtime.setup()
-  out = {g: ceiling(Tabletop(resolve(None, [f'scene.gripper={g}']).tabletop), args.yaw_deg)
-         for g in args.gripper}
+  out = {g: ceiling(Tabletop(resolve(None, [f'scene.gripper={g}', *args.set]).tabletop),
+                    args.yaw_deg) for g in args.gripper}
   print(json.dumps(out, indent=1))
 
 

@@ -299,3 +299,18 @@ def test_the_per_shape_table_of_the_gripper_page_is_its_results():
       assert cell == f'{m["grasp_success"]:.1f} ({m["grasps"]}), {m["pushes"]} pushes', cells
       checked += 1
   assert checked == 14
+
+
+def test_the_per_object_table_of_the_objects_page_is_its_results():
+  """objects.md's per-object table: the shipped default's counts on `novel` and the grasp
+  ceiling of each everyday object, recomputed."""
+  shapes = _row_of('docs/results/objects/shipped-novel-shapes', 'novel')['by_shape']
+  ceiling = json.loads((ROOT / 'docs/results/objects/grasp-ceiling-everyday.json').read_text())
+  rows = _table_rows('docs/results/objects.md', '| object | objects in the runs')
+  for cells in rows:
+    name = f'package:sim/objects/everyday/{cells[0].replace(" ", "_")}'
+    m = shapes[name]
+    assert cells[1:] == [str(m['objects']), f'{m["objects_picked"]:.1f}',
+                         f'{m["grasp_success"]:.1f} ({m["grasps"]})', str(m['pushes']),
+                         f'{ceiling["rg2"]["shapes"][name]["fraction"]:.2f}'], cells
+  assert len(rows) == len(shapes) - 1  # every object but the actions at no object
