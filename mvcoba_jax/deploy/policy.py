@@ -11,8 +11,8 @@ import numpy as np
 
 from mvcoba_jax.deploy import checks, model_file
 from mvcoba_jax.deploy.calibration import Calibration, DeployError
-from mvcoba_jax.sim.contract import changed_views, filled, observed_change
-from mvcoba_jax.sim.contract import pixel_to_world, push_length
+from mvcoba_jax.sim.contract import (changed_views, filled, observed_change, pixel_to_world,
+                                     push_length)
 
 
 @dataclasses.dataclass(frozen=True)
